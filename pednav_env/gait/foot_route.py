@@ -1,0 +1,265 @@
+"""Routes for the foot simulator: what each stride of the instrumented foot does.
+
+A route is a sequence of :class:`Stride` records; the simulator
+(:mod:`pednav_env.gait.foot`) turns it into a trajectory. Two sources:
+
+- :func:`square_route` — paper 003's square walk ("the model trajectory of
+  the foot is a square"; side and cadence are not printed: see
+  docs/REPRODUCTION.md);
+- :func:`random_route` — domain randomisation for the environments: legs of
+  random length, turns (heading changes spread over strides), stops
+  (standing still for seconds) and gait changes from slow walking to running.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from enum import IntEnum
+
+import numpy as np
+
+
+class Gait(IntEnum):
+    """Gait class of a stride (stored per sample as an int label)."""
+
+    STANDING = 0
+    SLOW_WALK = 1
+    WALK = 2
+    FAST_WALK = 3
+    RUN = 4
+
+
+@dataclass(frozen=True)
+class StrideShape:
+    """Timing and shape of one gait cycle of the instrumented foot.
+
+    Paper 003: a cycle is Γ₀ stance (T₀), Γ₁ heel-off (T₁), Γ₂ swing (T₂) and
+    Γ₃ heel-strike (T₃); for symmetric walking T₁ = T₃ and T₀ = T₂.
+    ``stride_length_m`` is the foot's displacement per cycle — what paper 003
+    calls the step length (its Table 1: 0.5 m and 1 m).
+    """
+
+    stride_length_m: float = 1.0
+    #: T₀, T₁, T₂, T₃ (s). Paper 003 prints none; 0.35/0.15/0.35/0.15 gives a 1 s cycle.
+    stance_s: float = 0.35
+    heel_off_s: float = 0.15
+    swing_s: float = 0.35
+    heel_strike_s: float = 0.15
+    #: Heel height at mid-swing (m).
+    swing_height_m: float = 0.10
+    #: Pitch at mid-swing (rad, positive = toes down).
+    mid_swing_pitch: float = 0.5
+    #: Roll at mid-swing (rad).
+    mid_swing_roll: float = 0.0
+    #: Pitch at toe-off (end of Γ₁) and at heel-strike (start of Γ₃), rad.
+    #: ``None`` = paper model: knots only at stance and mid-swing.
+    toe_off_pitch: float | None = None
+    heel_strike_pitch: float | None = None
+    gait: Gait = Gait.WALK
+
+    def __post_init__(self) -> None:
+        for name in ("stance_s", "heel_off_s", "swing_s", "heel_strike_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"StrideShape.{name} must be > 0, got {v!r}")
+        if not (math.isfinite(self.stride_length_m) and self.stride_length_m >= 0):
+            raise ValueError(f"StrideShape.stride_length_m must be ≥ 0, got {self.stride_length_m!r}")
+        if not (math.isfinite(self.swing_height_m) and self.swing_height_m >= 0):
+            raise ValueError(f"StrideShape.swing_height_m must be ≥ 0, got {self.swing_height_m!r}")
+        for name in ("mid_swing_pitch", "mid_swing_roll", "toe_off_pitch", "heel_strike_pitch"):
+            v = getattr(self, name)
+            if v is not None and not (math.isfinite(v) and abs(v) < 1.4):
+                raise ValueError(f"StrideShape.{name} must be a finite angle below 1.4 rad, got {v!r}")
+        if (self.toe_off_pitch is None) != (self.heel_strike_pitch is None):
+            raise ValueError("StrideShape.toe_off_pitch and heel_strike_pitch are set together")
+
+    @property
+    def cycle_s(self) -> float:
+        """Gait cycle T₀ + T₁ + T₂ + T₃ (s)."""
+        return self.stance_s + self.heel_off_s + self.swing_s + self.heel_strike_s
+
+    @property
+    def speed(self) -> float:
+        """Mean walking speed (m/s)."""
+        return self.stride_length_m / self.cycle_s
+
+
+@dataclass(frozen=True)
+class Stride:
+    """One cycle: stand ``stance_s + stop_s``, then move to the next footfall.
+
+    The next stance heel position is the current one plus
+    ``shape.stride_length_m`` along the new heading ψ + ``heading_change``
+    (turns happen in the air, between stances).
+    """
+
+    shape: StrideShape
+    heading_change: float = 0.0
+    stop_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.stop_s) and self.stop_s >= 0):
+            raise ValueError(f"Stride.stop_s must be ≥ 0, got {self.stop_s!r}")
+        if not (math.isfinite(self.heading_change) and abs(self.heading_change) <= math.pi):
+            raise ValueError(f"Stride.heading_change must be in [−π, π], got {self.heading_change!r}")
+
+
+@dataclass(frozen=True)
+class Route:
+    """Initial standing time, the strides, and final standing time (s)."""
+
+    strides: tuple[Stride, ...]
+    initial_stand_s: float = 2.0
+    final_stand_s: float = 1.0
+    #: Stance micro-motion, roll-over and heel-strike transients (beyond the paper).
+    realistic: bool = False
+    #: Per-route random phases for micro-motion (filled by random_route).
+    seed_phases: tuple[float, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        for name in ("initial_stand_s", "final_stand_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"Route.{name} must be ≥ 0, got {v!r}")
+
+    @property
+    def duration_s(self) -> float:
+        """Total duration (s)."""
+        return (
+            self.initial_stand_s
+            + sum(s.shape.cycle_s + s.stop_s for s in self.strides)
+            + self.final_stand_s
+        )
+
+
+def square_route(
+    side_m: float = 5.0, shape: StrideShape | None = None, laps: int = 1
+) -> Route:
+    """Paper 003's square: ``laps`` laps of a ``side_m`` square, turning left 90°.
+
+    The side must hold a whole number of strides.
+    """
+    shape = shape or StrideShape()
+    if not side_m > 0:
+        raise ValueError(f"side_m must be > 0, got {side_m!r}")
+    if shape.stride_length_m <= 0:
+        raise ValueError(f"stride_length_m must be > 0, got {shape.stride_length_m!r}")
+    per_side = side_m / shape.stride_length_m
+    if abs(per_side - round(per_side)) > 1e-9:
+        raise ValueError(
+            f"side_m={side_m} is not a whole number of strides of {shape.stride_length_m} m"
+        )
+    n = int(round(per_side))
+    strides = []
+    for lap in range(laps):
+        for side in range(4):
+            for i in range(n):
+                turn = math.pi / 2 if (i == 0 and (side > 0 or lap > 0)) else 0.0
+                strides.append(Stride(shape, heading_change=turn))
+    return Route(tuple(strides))
+
+
+@dataclass(frozen=True)
+class RouteRandomization:
+    """Ranges for :func:`random_route` (domain randomisation, beyond the papers).
+
+    Gait classes and their ranges: slow walk 0.4–0.8 m strides in 1.2–1.5 s
+    cycles, walk 0.8–1.2 m in 1.0–1.2 s, fast walk 1.2–1.4 m in 0.85–1.0 s
+    (the issue's 0.4–1.4 m walking range), run 1.6–2.4 m in 0.65–0.8 s with a
+    short flat stance (8–12 % of the cycle), heel-off and heel-strike of 10 %
+    each, and a long swing (flight phase).
+    """
+
+    duration_s: tuple[float, float] = (60.0, 180.0)
+    leg_strides: tuple[int, int] = (4, 20)
+    max_turn_per_stride: float = math.radians(60.0)
+    stop_probability: float = 0.15
+    stop_s: tuple[float, float] = (1.0, 8.0)
+    gait_weights: tuple[float, float, float, float] = (0.2, 0.4, 0.25, 0.15)
+
+    def __post_init__(self) -> None:
+        lo, hi = self.duration_s
+        if not (0 < lo <= hi and math.isfinite(hi)):
+            raise ValueError(f"RouteRandomization.duration_s must satisfy 0 < lo ≤ hi, got {self.duration_s}")
+        if not (1 <= self.leg_strides[0] <= self.leg_strides[1]):
+            raise ValueError(f"RouteRandomization.leg_strides invalid: {self.leg_strides}")
+        if not (0 <= self.stop_probability <= 1):
+            raise ValueError(f"RouteRandomization.stop_probability must be in [0, 1], got {self.stop_probability}")
+        if not (0 <= self.stop_s[0] <= self.stop_s[1]):
+            raise ValueError(f"RouteRandomization.stop_s invalid: {self.stop_s}")
+        w = np.asarray(self.gait_weights, dtype=float)
+        if w.shape != (4,) or np.any(w < 0) or w.sum() <= 0:
+            raise ValueError(f"RouteRandomization.gait_weights invalid: {self.gait_weights}")
+
+
+def random_stride_shape(rng: np.random.Generator, gait: Gait) -> StrideShape:
+    """Draw a realistic stride shape for ``gait`` (ranges in RouteRandomization)."""
+    u = rng.uniform
+    if gait is Gait.RUN:
+        length, cycle = u(1.6, 2.4), u(0.65, 0.8)
+        stance_frac, heel_frac = u(0.08, 0.12), 0.10
+        t0, t1 = stance_frac * cycle, heel_frac * cycle
+        t2 = cycle - t0 - 2 * t1
+        height, toe_off, heel_strike = u(0.2, 0.3), u(0.6, 0.8), -u(0.15, 0.3)
+    else:
+        length, cycle = {
+            Gait.SLOW_WALK: (u(0.4, 0.8), u(1.2, 1.5)),
+            Gait.WALK: (u(0.8, 1.2), u(1.0, 1.2)),
+            Gait.FAST_WALK: (u(1.2, 1.4), u(0.85, 1.0)),
+        }[gait]
+        a = u(0.30, 0.38)  # T0 = T2 = a·cycle, T1 = T3 = (0.5 − a)·cycle (paper 003 symmetry)
+        t0, t1, t2 = a * cycle, (0.5 - a) * cycle, a * cycle
+        speed = length / cycle
+        height = 0.06 + 0.04 * speed + u(-0.01, 0.01)
+        toe_off, heel_strike = 0.4 + 0.3 * speed + u(-0.05, 0.05), -(0.2 + 0.1 * speed)
+    return StrideShape(
+        stride_length_m=length,
+        stance_s=t0,
+        heel_off_s=t1,
+        swing_s=t2,
+        heel_strike_s=t1,
+        swing_height_m=height,
+        mid_swing_pitch=u(-0.1, 0.2),
+        mid_swing_roll=u(-0.05, 0.05),
+        toe_off_pitch=toe_off,
+        heel_strike_pitch=heel_strike,
+        gait=gait,
+    )
+
+
+def random_route(rng: np.random.Generator, config: RouteRandomization | None = None) -> Route:
+    """A random walk: legs of one gait class separated by turns and stops.
+
+    Draws only from ``rng``; the route starts at the origin heading east.
+    """
+    cfg = config or RouteRandomization()
+    target = rng.uniform(*cfg.duration_s)
+    weights = np.asarray(cfg.gait_weights, dtype=float)
+    weights = weights / weights.sum()
+    gaits = [Gait.SLOW_WALK, Gait.WALK, Gait.FAST_WALK, Gait.RUN]
+    initial, final = 2.0, 1.0
+    strides: list[Stride] = []
+    elapsed = initial + final
+    while True:
+        gait = gaits[int(rng.choice(4, p=weights))]
+        n_leg = int(rng.integers(cfg.leg_strides[0], cfg.leg_strides[1] + 1))
+        turn_total = rng.uniform(-math.pi, math.pi)
+        n_turn = max(1, math.ceil(abs(turn_total) / cfg.max_turn_per_stride))
+        stop = rng.uniform(*cfg.stop_s) if rng.uniform() < cfg.stop_probability else 0.0
+        leg = []
+        for i in range(n_leg):
+            shape = random_stride_shape(rng, gait)
+            turn = turn_total / n_turn if i < n_turn else 0.0
+            leg.append(Stride(shape, heading_change=turn, stop_s=stop if i == 0 else 0.0))
+        for s in leg:
+            if elapsed + s.shape.cycle_s + s.stop_s > target and strides:
+                phases = tuple(rng.uniform(0, 2 * math.pi, 3))
+                return Route(tuple(strides), initial, final, realistic=True, seed_phases=phases)
+            strides.append(s)
+            elapsed += s.shape.cycle_s + s.stop_s
+
+
+def paper_stride_shape(stride_length_m: float) -> StrideShape:
+    """Paper 003 scenario stride: the paper's knots only (stance and mid-swing)."""
+    return replace(StrideShape(), stride_length_m=stride_length_m)
