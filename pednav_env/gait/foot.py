@@ -60,8 +60,13 @@ _HS_LAMBDA = complex(-1.0, 3.0)
 
 def _hs_unit_peak() -> float:
     s = np.linspace(0, 12, 4001)
-    return float(np.max(np.abs(np.imag((2 + 4 * _HS_LAMBDA * s + _HS_LAMBDA**2 * s**2)
-                                       * np.exp(_HS_LAMBDA * s)))))
+    return float(
+        np.max(
+            np.abs(
+                np.imag((2 + 4 * _HS_LAMBDA * s + _HS_LAMBDA**2 * s**2) * np.exp(_HS_LAMBDA * s))
+            )
+        )
+    )
 
 
 _HS_PEAK = _hs_unit_peak()
@@ -84,7 +89,9 @@ class FootSimConfig:
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ValueError(f"FootSimConfig.rate_hz must be > 0, got {self.rate_hz!r}")
         if len(self.lever_arm_m) != 3 or not all(math.isfinite(c) for c in self.lever_arm_m):
-            raise ValueError(f"FootSimConfig.lever_arm_m must be 3 finite numbers, got {self.lever_arm_m!r}")
+            raise ValueError(
+                f"FootSimConfig.lever_arm_m must be 3 finite numbers, got {self.lever_arm_m!r}"
+            )
         if not (math.isfinite(self.g) and self.g > 0):
             raise ValueError(f"FootSimConfig.g must be > 0, got {self.g!r}")
 
@@ -286,7 +293,9 @@ def imu_kinematics(
     return pos, vel, acc, omega, f_b
 
 
-def simulate_foot(routes: Route | Sequence[Route], config: FootSimConfig | None = None) -> FootTrajectory:
+def simulate_foot(
+    routes: Route | Sequence[Route], config: FootSimConfig | None = None
+) -> FootTrajectory:
     """Simulate the instrumented foot of N walkers.
 
     Walks shorter than the longest are padded by standing still at the end.
@@ -336,8 +345,10 @@ def simulate_foot(routes: Route | Sequence[Route], config: FootSimConfig | None 
         lo, hi = t_grid[:-1], t_grid[1:]
         idx = np.searchsorted(starts, lo + 1e-12, side="right") - 1
         valid = idx >= 0
-        inside = valid & (lo >= starts[np.maximum(idx, 0)] - 1e-12) & (
-            hi <= ends[np.maximum(idx, 0)] + 1e-12
+        inside = (
+            valid
+            & (lo >= starts[np.maximum(idx, 0)] - 1e-12)
+            & (hi <= ends[np.maximum(idx, 0)] + 1e-12)
         )
         inside |= lo >= sched.pp.x[-1] - 1e-12
         stance[i] = inside

@@ -64,13 +64,17 @@ class StrideShape:
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"StrideShape.{name} must be > 0, got {v!r}")
         if not (math.isfinite(self.stride_length_m) and self.stride_length_m >= 0):
-            raise ValueError(f"StrideShape.stride_length_m must be ≥ 0, got {self.stride_length_m!r}")
+            raise ValueError(
+                f"StrideShape.stride_length_m must be ≥ 0, got {self.stride_length_m!r}"
+            )
         if not (math.isfinite(self.swing_height_m) and self.swing_height_m >= 0):
             raise ValueError(f"StrideShape.swing_height_m must be ≥ 0, got {self.swing_height_m!r}")
         for name in ("mid_swing_pitch", "mid_swing_roll", "toe_off_pitch", "heel_strike_pitch"):
             v = getattr(self, name)
             if v is not None and not (math.isfinite(v) and abs(v) < 1.4):
-                raise ValueError(f"StrideShape.{name} must be a finite angle below 1.4 rad, got {v!r}")
+                raise ValueError(
+                    f"StrideShape.{name} must be a finite angle below 1.4 rad, got {v!r}"
+                )
         if (self.toe_off_pitch is None) != (self.heel_strike_pitch is None):
             raise ValueError("StrideShape.toe_off_pitch and heel_strike_pitch are set together")
 
@@ -102,7 +106,9 @@ class Stride:
         if not (math.isfinite(self.stop_s) and self.stop_s >= 0):
             raise ValueError(f"Stride.stop_s must be ≥ 0, got {self.stop_s!r}")
         if not (math.isfinite(self.heading_change) and abs(self.heading_change) <= math.pi):
-            raise ValueError(f"Stride.heading_change must be in [−π, π], got {self.heading_change!r}")
+            raise ValueError(
+                f"Stride.heading_change must be in [−π, π], got {self.heading_change!r}"
+            )
 
 
 @dataclass(frozen=True)
@@ -134,11 +140,17 @@ class Route:
 
 
 def square_route(
-    side_m: float = 5.0, shape: StrideShape | None = None, laps: int = 1
+    side_m: float = 5.0,
+    shape: StrideShape | None = None,
+    laps: int = 1,
+    initial_stand_s: float = 1.0,
+    final_stand_s: float = 1.0,
 ) -> Route:
     """Paper 003's square: ``laps`` laps of a ``side_m`` square, turning left 90°.
 
-    The side must hold a whole number of strides.
+    The side must hold a whole number of strides. The walker stands
+    ``initial_stand_s`` first (the alignment window) and ``final_stand_s`` at
+    the end.
     """
     shape = shape or StrideShape()
     if not side_m > 0:
@@ -157,7 +169,7 @@ def square_route(
             for i in range(n):
                 turn = math.pi / 2 if (i == 0 and (side > 0 or lap > 0)) else 0.0
                 strides.append(Stride(shape, heading_change=turn))
-    return Route(tuple(strides))
+    return Route(tuple(strides), initial_stand_s, final_stand_s)
 
 
 @dataclass(frozen=True)
@@ -181,11 +193,16 @@ class RouteRandomization:
     def __post_init__(self) -> None:
         lo, hi = self.duration_s
         if not (0 < lo <= hi and math.isfinite(hi)):
-            raise ValueError(f"RouteRandomization.duration_s must satisfy 0 < lo ≤ hi, got {self.duration_s}")
+            raise ValueError(
+                f"RouteRandomization.duration_s must satisfy 0 < lo ≤ hi, got {self.duration_s}"
+            )
         if not (1 <= self.leg_strides[0] <= self.leg_strides[1]):
             raise ValueError(f"RouteRandomization.leg_strides invalid: {self.leg_strides}")
         if not (0 <= self.stop_probability <= 1):
-            raise ValueError(f"RouteRandomization.stop_probability must be in [0, 1], got {self.stop_probability}")
+            raise ValueError(
+                "RouteRandomization.stop_probability must be in [0, 1], "
+                f"got {self.stop_probability}"
+            )
         if not (0 <= self.stop_s[0] <= self.stop_s[1]):
             raise ValueError(f"RouteRandomization.stop_s invalid: {self.stop_s}")
         w = np.asarray(self.gait_weights, dtype=float)

@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 #: Paper ids with a reproduction module, mapped to the module name.
-PAPERS: dict[str, str] = {"003": "paper003"}
+PAPERS: dict[str, str] = {"003": "paper003", "001": "paper001"}
 
 
 @dataclass(frozen=True)

@@ -290,9 +290,7 @@ def simulate_imu(
         else:
             drift = rng.standard_normal((t, 3)) * s.gyro_step_drift_std
         rw_w = np.cumsum(rng.standard_normal((t, 3)), axis=0) * (s.gyro_bias_rw_density * dt**0.5)
-        rw_f = np.cumsum(rng.standard_normal((t, 3)), axis=0) * (
-            s.accel_bias_rw_density * dt**0.5
-        )
+        rw_f = np.cumsum(rng.standard_normal((t, 3)), axis=0) * (s.accel_bias_rw_density * dt**0.5)
         noise_w = rng.standard_normal((t, 3)) * s.gyro_noise_std(rate_hz)
         noise_f = rng.standard_normal((t, 3)) * s.accel_noise_std(rate_hz)
         omega_out[i] = omega_b[i] @ K_w.T + b_w + rw_w + drift + noise_w
@@ -300,8 +298,9 @@ def simulate_imu(
 
     lsb_w = np.array([s.gyro_lsb for s in specs])[:, None, None]
     lsb_f = np.array([s.accel_lsb for s in specs])[:, None, None]
-    omega_out = np.where(lsb_w > 0, np.round(omega_out / np.where(lsb_w > 0, lsb_w, 1)) * lsb_w,
-                         omega_out)
+    omega_out = np.where(
+        lsb_w > 0, np.round(omega_out / np.where(lsb_w > 0, lsb_w, 1)) * lsb_w, omega_out
+    )
     f_out = np.where(lsb_f > 0, np.round(f_out / np.where(lsb_f > 0, lsb_f, 1)) * lsb_f, f_out)
     rng_w = np.array([s.gyro_range for s in specs])[:, None, None]
     rng_f = np.array([s.accel_range for s in specs])[:, None, None]
