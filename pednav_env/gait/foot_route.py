@@ -57,8 +57,24 @@ class StrideShape:
     toe_off_pitch: float | None = None
     heel_strike_pitch: float | None = None
     gait: Gait = Gait.WALK
+    #: Leg length l (m), hip to ground. Bounds the stride: two steps whose legs
+    #: swing at most ±60° from the vertical give at most 2·2l·sin 60° = 3.46 l.
+    leg_length_m: float = 0.9
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.leg_length_m) and self.leg_length_m > 0):
+            raise ValueError(f"StrideShape.leg_length_m must be > 0, got {self.leg_length_m!r}")
+        max_stride = 4.0 * self.leg_length_m * math.sin(math.radians(60.0))
+        if self.stride_length_m > max_stride:
+            raise ValueError(
+                f"StrideShape.stride_length_m={self.stride_length_m!r} is beyond the leg model: "
+                f"at most {max_stride:.3f} m for leg_length_m={self.leg_length_m!r}"
+            )
+        if self.swing_height_m >= self.leg_length_m:
+            raise ValueError(
+                f"StrideShape.swing_height_m={self.swing_height_m!r} must be below "
+                f"leg_length_m={self.leg_length_m!r}"
+            )
         for name in ("stance_s", "heel_off_s", "swing_s", "heel_strike_s"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):

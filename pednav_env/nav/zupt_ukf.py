@@ -468,6 +468,7 @@ class ZuptUkf:
         if t < n_align:
             raise ValueError(f"record of {t} samples is shorter than the alignment window")
         self.initialize(f_b[:, :n_align])
+        self.sample[:] = n_align
         shoe = None
         if self.uses_shoe:
             from pednav_env.nav.detectors import shoe_statistic
