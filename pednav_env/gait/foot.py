@@ -231,15 +231,24 @@ def _add_realism(sched: _Schedule, route: Route, t: Array, y: list[Array]) -> No
     """Add stance roll-over, micro-motion and heel-strike transients in place.
 
     ``y`` = [value, first derivative, second derivative], each (len(t), 6).
+    Each effect touches only the samples of its own interval (sorted slicing).
     """
     phases = route.seed_phases or (0.0, 0.0, 0.0)
     freqs = 2 * np.pi * np.array([9.0, 11.0, 13.0])
+    order = np.argsort(t, kind="stable")
+    t_sorted = t[order]
+
+    def between(a: float, b: float, closed_left: bool = False) -> NDArray[np.intp]:
+        lo = np.searchsorted(t_sorted, a, side="left" if closed_left else "right")
+        hi = np.searchsorted(t_sorted, b, side="left")
+        return order[lo:hi]
+
     for start, end, speed, nominal in sched.stance_intervals:
         if speed <= 0:
             continue
         w_start = max(start, end - nominal)
-        sel = (t > w_start) & (t < end)
-        if not np.any(sel):
+        sel = between(w_start, end)
+        if sel.size == 0:
             continue
         ts = t[sel]
         w, w1, w2 = _sin2_window(ts, w_start, end)
@@ -256,8 +265,8 @@ def _add_realism(sched: _Schedule, route: Route, t: Array, y: list[Array]) -> No
             y[2][sel, j] += a_mm * (w2 * sn + 2 * w1 * freqs[j] * cs - w * freqs[j] ** 2 * sn)
     lam = _HS_LAMBDA
     for t_hs, speed, forward in sched.strike_times:
-        sel = (t >= t_hs) & (t < t_hs + 12 * _HS_TAU)
-        if not np.any(sel):
+        sel = between(t_hs, t_hs + 12 * _HS_TAU, closed_left=True)
+        if sel.size == 0:
             continue
         s = (t[sel] - t_hs) / _HS_TAU
         e = np.exp(lam * s)

@@ -184,7 +184,9 @@ class OnlineStanceDetector:
         self.window = w
         self._buf = np.zeros((num_walkers, w, 2))
         self._count = np.zeros(num_walkers, dtype=np.int64)
-        self._pos = 0
+        # Per-walker ring position: a walker's sums never depend on its batch.
+        self._pos = np.zeros(num_walkers, dtype=np.int64)
+        self._lanes = np.arange(num_walkers)
         self.run = np.zeros(num_walkers, dtype=np.int64)
         self.in_stance = np.zeros(num_walkers, dtype=bool)
 
@@ -192,6 +194,7 @@ class OnlineStanceDetector:
         sel = slice(None) if mask is None else mask
         self._buf[sel] = 0.0
         self._count[sel] = 0
+        self._pos[sel] = 0
         self.run[sel] = 0
         self.in_stance[sel] = False
 
@@ -201,8 +204,8 @@ class OnlineStanceDetector:
         """Eq (5) for this sample with causal window means."""
         if self.window == 1:
             return (omega_norm <= omega_max) & (np.abs(f_n3 - self.config.g) <= delta_f_max)
-        self._buf[:, self._pos, 0] = omega_norm
-        self._buf[:, self._pos, 1] = f_n3
+        self._buf[self._lanes, self._pos, 0] = omega_norm
+        self._buf[self._lanes, self._pos, 1] = f_n3
         self._pos = (self._pos + 1) % self.window
         self._count = np.minimum(self._count + 1, self.window)
         means = self._buf.sum(axis=1) / self._count[:, None]
