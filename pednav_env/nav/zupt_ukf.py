@@ -160,6 +160,10 @@ class ZuptUkfConfig:
     initial_yaw_std: float = 1e-3  # rad: ψ = 0 defines the frame
     #: Static alignment window at the start (s); paper 003 eq (4).
     alignment_s: float = 1.0
+    #: Subtract the mean gyro reading of the alignment window from every later
+    #: sample (paper 003's real-data calibration, "b_ω = ⟨ω''⟩ before walking").
+    #: Off for the paper's simulation, whose drift changes every step.
+    calibrate_gyro_bias: bool = False
     g: float = STANDARD_GRAVITY
 
     def __post_init__(self) -> None:
@@ -303,6 +307,7 @@ class ZuptUkf:
         self.diverged = np.zeros(n, dtype=bool)
         self.last_nis = np.zeros(n)
         self.time_since_update_s = np.zeros(n)
+        self.gyro_bias = np.zeros((n, 3))
 
     # ------------------------------------------------------------------ init
     def initial_state(self, euler0: Array) -> tuple[Array, Array]:
@@ -319,13 +324,26 @@ class ZuptUkf:
         )
         return x0, np.broadcast_to(np.diag(std**2), (b, STATE_DIM, STATE_DIM)).copy()
 
-    def initialize(self, f_align_b: Array, mask: NDArray[np.bool_] | None = None) -> None:
+    def initialize(
+        self,
+        f_align_b: Array,
+        mask: NDArray[np.bool_] | None = None,
+        omega_align_b: Array | None = None,
+    ) -> None:
         """Static alignment (eq 4) from specific force ``(B, W, 3)`` at rest and
-        reset of the walkers in ``mask`` (all when None)."""
+        reset of the walkers in ``mask`` (all when None). With
+        ``calibrate_gyro_bias`` the mean of ``omega_align_b`` ``(B, W, 3)``
+        becomes the gyro bias subtracted from later samples."""
         idx = np.arange(self.n) if mask is None else np.flatnonzero(mask)
         euler0 = align_static(f_align_b, self.config.g)
         if euler0.shape[0] != len(idx):
             raise ValueError(f"f_align_b has {euler0.shape[0]} walkers, expected {len(idx)}")
+        if self.config.calibrate_gyro_bias:
+            if omega_align_b is None:
+                raise ValueError("calibrate_gyro_bias needs omega_align_b")
+            self.gyro_bias[idx] = np.asarray(omega_align_b, dtype=float).mean(axis=1)
+        else:
+            self.gyro_bias[idx] = 0.0
         self.set_state(idx, *self.initial_state(euler0))
         self.detector.reset(None if mask is None else mask)
         self.height_ref[idx] = 0.0
@@ -351,6 +369,7 @@ class ZuptUkf:
 
         Returns the detected (stance_start, stance_end) events of this sample.
         """
+        omega_b = omega_b - self.gyro_bias
         dqT, f_mid = step_increments(omega_b, f_b, self.dt)
         if self.uses_shoe:
             if shoe_statistic is None:
@@ -467,7 +486,7 @@ class ZuptUkf:
         t = omega_b.shape[1]
         if t < n_align:
             raise ValueError(f"record of {t} samples is shorter than the alignment window")
-        self.initialize(f_b[:, :n_align])
+        self.initialize(f_b[:, :n_align], omega_align_b=omega_b[:, :n_align])
         self.sample[:] = n_align
         shoe = None
         if self.uses_shoe:

@@ -150,6 +150,32 @@ class ImuSpec:
         )
 
     @classmethod
+    def adis16470(cls) -> ImuSpec:
+        """Modern industrial MEMS grade, ADIS16470 class, with a ±2000 °/s gyro
+        that does not saturate in running: gyro noise 0.008 °/s/√Hz, accel
+        0.1 mg/√Hz, residual biases 0.05 °/s and 2 mg, 0.1 % scale, 0.05°
+        misalignment, 0.1 °/s and 1.25 mg LSB, ±40 g."""
+        deg = math.pi / 180.0
+        mg = 1e-3 * STANDARD_GRAVITY
+        return cls(
+            gyro_noise_density=0.008 * deg,
+            accel_noise_density=0.1 * mg,
+            gyro_step_drift_std=0.0,
+            gyro_bias_std=0.05 * deg,
+            accel_bias_std=2.0 * mg,
+            gyro_bias_rw_density=0.001 * deg,
+            accel_bias_rw_density=0.02 * mg,
+            gyro_scale_std=0.001,
+            accel_scale_std=0.001,
+            gyro_misalignment_std=0.05 * deg,
+            accel_misalignment_std=0.05 * deg,
+            gyro_lsb=0.1 * deg,
+            accel_lsb=1.25 * mg,
+            gyro_range=2000.0 * deg,
+            accel_range=40.0 * STANDARD_GRAVITY,
+        )
+
+    @classmethod
     def consumer(cls) -> ImuSpec:
         """Consumer (phone/wearable) MEMS grade, MPU-6050/BMI160 class: gyro
         noise 0.015 °/s/√Hz, accel 0.3 mg/√Hz, residual biases 0.5 °/s and
@@ -184,6 +210,7 @@ class ImuSpec:
 IMU_GRADES = {
     "paper003": ImuSpec.paper003,
     "adis16405": ImuSpec.adis16405,
+    "adis16470": ImuSpec.adis16470,
     "consumer": ImuSpec.consumer,
     "ideal": ImuSpec.ideal,
 }

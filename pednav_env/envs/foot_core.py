@@ -1,0 +1,411 @@
+"""Batched episode engine behind ``pednav/FootZupt-v0`` (scalar and vector).
+
+One implementation for any number of lanes: the scalar environment is this
+core with N = 1, the native vector environment the same core with
+N = ``num_envs``. Each lane owns its episode (walk, IMU record, seed); all
+lanes step through the ZUPT-UKF together, one IMU sample at a time, in one
+numpy call chain (:class:`pednav_env.nav.zupt_ukf.ZuptUkf`).
+
+Episode: a walk drawn from the lane's generator (route with turns, stops and
+gait changes; IMU grade and its errors), a 1 s alignment at rest, then
+navigation. A decision interval is ``decision_interval_s`` of IMU data
+(default 0.5 s). The action sets the filter's knobs for the next interval as
+``base · span ** a`` (log scale; a = 0 is the paper configuration).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from pednav_env.gait.foot import FootSimConfig, simulate_foot
+from pednav_env.gait.foot_route import (
+    RouteRandomization,
+    paper_stride_shape,
+    random_route,
+    square_route,
+)
+from pednav_env.nav.zupt_ukf import ZuptUkf, ZuptUkfConfig
+from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
+
+Array = NDArray[np.float64]
+
+#: Knobs set by the action: (name, paper base value, span, unit).
+#: ω_max and Δf_max bases are paper 003's simulation thresholds (see
+#: ThresholdDetectorConfig); the noise scales multiply the paper's Q and R.
+ACTION_KNOBS: tuple[tuple[str, float, float, str], ...] = (
+    ("omega_max", 0.22, 10.0, "rad/s"),
+    ("delta_f_max", 0.33, 10.0, "m/s²"),
+    ("process_noise_scale", 1.0, 100.0, "1"),
+    ("zupt_noise_scale", 1.0, 100.0, "1"),
+)
+#: Optional fifth knob: minimum stance duration = MIN_STANCE_MAX_S · max(a, 0)
+#: (linear, so that a = 0 keeps the paper's "no minimum").
+MIN_STANCE_MAX_S = 0.15
+
+#: Observation entries: (name, low, high); documented in the env docstring.
+OBS_FEATURES: tuple[tuple[str, float, float], ...] = (
+    ("gyro_norm_mean", 0.0, 50.0),
+    ("gyro_norm_std", 0.0, 50.0),
+    ("gyro_norm_max", 0.0, 50.0),
+    ("accel_excess_mean", -20.0, 200.0),
+    ("accel_excess_std", 0.0, 200.0),
+    ("accel_excess_absmax", 0.0, 200.0),
+    ("stance_fraction", 0.0, 1.0),
+    ("stance_starts", 0.0, 50.0),
+    ("stance_duration_avg", 0.0, 20.0),
+    ("time_since_zupt", 0.0, 200.0),
+    ("log_nis_last", 0.0, 30.0),
+    ("log_nis_interval", 0.0, 30.0),
+    ("log10_trace_p_pos", -12.0, 8.0),
+    ("log10_trace_p_vel", -12.0, 8.0),
+    ("log10_trace_p_att", -12.0, 8.0),
+    ("zupt_rejected_fraction", 0.0, 1.0),
+)
+
+
+@dataclass(frozen=True)
+class FootZuptConfig:
+    """Settings of the foot environment (all lanes share them).
+
+    ``scenario``: ``"random"`` (domain randomisation) or ``"paper"`` (paper
+    003's square walk, 1 m strides, its IMU).
+    """
+
+    scenario: str = "random"
+    decision_interval_s: float = 0.5
+    rate_hz: float = 100.0  # paper 003
+    route: RouteRandomization = field(default_factory=RouteRandomization)
+    #: IMU grades drawn per episode and their weights (random scenario).
+    imu_grades: tuple[str, ...] = ("paper003", "adis16470", "consumer")
+    imu_grade_weights: tuple[float, ...] = (0.4, 0.3, 0.3)
+    #: The paper filter (the policy at action 0): paper 003's IMU model and
+    #: thresholds; in the random scenario also its real-data gyro-bias
+    #: calibration at rest (the paper's simulation has none). None = that default.
+    filter: ZuptUkfConfig | None = None
+    tune_min_stance: bool = False
+    #: Divergence: horizontal error beyond this + fraction × distance walked.
+    divergence_error_m: float = 25.0
+    divergence_error_fraction: float = 0.25
+
+    def __post_init__(self) -> None:
+        if self.scenario not in ("random", "paper"):
+            raise ValueError(f"scenario must be 'random' or 'paper', got {self.scenario!r}")
+        if self.filter is None:
+            calibrate = self.scenario == "random"
+            object.__setattr__(self, "filter", ZuptUkfConfig(calibrate_gyro_bias=calibrate))
+        if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
+            raise ValueError(f"rate_hz must be > 0, got {self.rate_hz!r}")
+        if not (math.isfinite(self.decision_interval_s) and self.decision_interval_s > 0):
+            raise ValueError(f"decision_interval_s must be > 0, got {self.decision_interval_s!r}")
+        if round(self.decision_interval_s * self.rate_hz) < 1:
+            raise ValueError(
+                f"decision_interval_s={self.decision_interval_s!r} is shorter than one IMU sample"
+            )
+        for g in self.imu_grades:
+            if g not in IMU_GRADES:
+                raise ValueError(f"imu_grades: unknown grade {g!r}; known: {sorted(IMU_GRADES)}")
+        w = np.asarray(self.imu_grade_weights, dtype=float)
+        if w.shape != (len(self.imu_grades),) or np.any(w < 0) or w.sum() <= 0:
+            raise ValueError(f"imu_grade_weights invalid: {self.imu_grade_weights!r}")
+        if not (self.divergence_error_m > 0 and self.divergence_error_fraction >= 0):
+            raise ValueError("divergence_error_m must be > 0 and divergence_error_fraction ≥ 0")
+
+    @property
+    def interval_samples(self) -> int:
+        return int(round(self.decision_interval_s * self.rate_hz))
+
+    @property
+    def action_dim(self) -> int:
+        return len(ACTION_KNOBS) + int(self.tune_min_stance)
+
+    @property
+    def max_samples(self) -> int:
+        """Capacity of the per-lane buffers (longest possible walk)."""
+        if self.scenario == "paper":
+            return int(math.ceil(paper_route().duration_s * self.rate_hz)) + 1
+        # random_route stops before exceeding the drawn duration; +1 s margin
+        return int(math.ceil((self.route.duration_s[1] + 1.0) * self.rate_hz)) + 1
+
+
+def paper_route():
+    """Paper 003's square (5 m side, 1 m strides)."""
+    return square_route(5.0, paper_stride_shape(1.0))
+
+
+@dataclass
+class Episode:
+    """One lane's walk: IMU record and the truth used for reward and info."""
+
+    omega_b: Array  # (T, 3)
+    f_b: Array  # (T, 3)
+    pos_n: Array  # (T+1, 3) truth
+    stance: NDArray[np.bool_]  # (T,) truth
+    distance_m: Array  # (T+1,)
+    imu_grade: str
+
+
+def generate_episode(config: FootZuptConfig, rng: np.random.Generator) -> Episode:
+    """Draw one episode from ``rng`` (fixed draw order: route, grade, IMU errors)."""
+    sim = FootSimConfig(rate_hz=config.rate_hz)
+    if config.scenario == "paper":
+        route = paper_route()
+        grade = "paper003"
+    else:
+        route = random_route(rng, config.route)
+        w = np.asarray(config.imu_grade_weights, dtype=float)
+        grade = config.imu_grades[int(rng.choice(len(w), p=w / w.sum()))]
+    truth = simulate_foot(route, sim)
+    imu = simulate_imu(
+        truth.omega_b,
+        truth.f_b,
+        config.rate_hz,
+        IMU_GRADES[grade](),
+        [rng],
+        gait_step_index=truth.gait_step,
+    )
+    return Episode(
+        imu.omega_b[0], imu.f_b[0], truth.pos_n[0], truth.stance[0], truth.distance_m[0], grade
+    )
+
+
+class FootZuptCore:
+    """N lanes of the foot environment stepping together."""
+
+    def __init__(self, config: FootZuptConfig, num_envs: int, env_name: str) -> None:
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be ≥ 1, got {num_envs!r}")
+        self.config = config
+        self.n = int(num_envs)
+        self.env_name = env_name
+        self.k = config.interval_samples
+        self.dt = 1.0 / config.rate_hz
+        self.n_align = max(1, int(round(config.filter.alignment_s * config.rate_hz)))
+        self.engine = ZuptUkf(config.filter, config.rate_hz, self.n)
+        cap = config.max_samples + self.k
+        n = self.n
+        self.omega = np.zeros((n, cap, 3))
+        self.f = np.zeros((n, cap, 3))
+        self.f[..., 2] = config.filter.g  # padding: standing still
+        self.pos = np.zeros((n, cap + 1, 3))
+        self.true_stance = np.zeros((n, cap), dtype=bool)
+        self.distance = np.zeros((n, cap + 1))
+        self.length = np.zeros(n, dtype=np.int64)
+        self.cursor = np.zeros(n, dtype=np.int64)
+        self.nav_samples = np.ones(n, dtype=np.int64)
+        self.grade = ["" for _ in range(n)]
+        self.action = np.zeros((n, config.action_dim))
+        self.clipped = np.zeros(n, dtype=np.int64)
+        self.stance_avg_s = np.zeros(n)
+        self.stance_len = np.zeros(n, dtype=np.int64)
+        self.obs = np.zeros((n, len(OBS_FEATURES) + config.action_dim), dtype=np.float32)
+        self.last_error = np.zeros(n)
+        self.lanes = np.arange(n)
+        self.obs_low = np.array(
+            [lo for _, lo, _ in OBS_FEATURES] + [-1.0] * config.action_dim, dtype=np.float32
+        )
+        self.obs_high = np.array(
+            [hi for _, _, hi in OBS_FEATURES] + [1.0] * config.action_dim, dtype=np.float32
+        )
+
+    # ------------------------------------------------------------------ reset
+    def reset_lanes(self, lanes: NDArray[np.integer], rngs: list[np.random.Generator]) -> None:
+        """Start new episodes in ``lanes``, each drawn from its own generator."""
+        lanes = np.asarray(lanes, dtype=np.int64)
+        c = self.config
+        for lane, rng in zip(lanes, rngs, strict=True):
+            ep = generate_episode(c, rng)
+            t = ep.omega_b.shape[0]
+            self.omega[lane] = 0.0
+            self.f[lane] = 0.0
+            self.f[lane, :, 2] = c.filter.g
+            self.omega[lane, :t] = ep.omega_b
+            self.f[lane, :t] = ep.f_b
+            self.pos[lane, : t + 1] = ep.pos_n
+            self.pos[lane, t + 1 :] = ep.pos_n[-1]
+            self.true_stance[lane] = True
+            self.true_stance[lane, :t] = ep.stance
+            self.distance[lane, : t + 1] = ep.distance_m
+            self.distance[lane, t + 1 :] = ep.distance_m[-1]
+            self.length[lane] = t
+            self.grade[lane] = ep.imu_grade
+        mask = np.zeros(self.n, dtype=bool)
+        mask[lanes] = True
+        self.engine.initialize(
+            self.f[lanes, : self.n_align], mask, omega_align_b=self.omega[lanes, : self.n_align]
+        )
+        self.cursor[lanes] = self.n_align
+        self.nav_samples[lanes] = np.maximum(self.length[lanes] - self.n_align, 1)
+        self.action[lanes] = 0.0
+        self.clipped[lanes] = 0
+        self.stance_avg_s[lanes] = 0.0
+        self.stance_len[lanes] = 0
+        self.last_error[lanes] = 0.0
+        self._apply_action(lanes)
+        self.obs[lanes] = self._features(lanes, None)
+
+    # ------------------------------------------------------------------ action
+    def validate_action(self, action: Any) -> Array:
+        """Shape ``(N, k)`` and finiteness check; returns float64."""
+        a = np.asarray(action, dtype=np.float64)
+        want = (self.n, self.config.action_dim)
+        if a.shape != want:
+            raise ValueError(f"{self.env_name}: actions must have shape {want}, got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{self.env_name}: action contains NaN or inf: {a.tolist()}")
+        return a
+
+    def _apply_action(self, lanes: NDArray[np.integer]) -> None:
+        a = self.action[lanes]
+        e = self.engine
+        values = [base * span ** a[:, i] for i, (_, base, span, _) in enumerate(ACTION_KNOBS)]
+        e.omega_max[lanes], e.delta_f_max[lanes] = values[0], values[1]
+        e.process_noise_scale[lanes], e.zupt_noise_scale[lanes] = values[2], values[3]
+        if self.config.tune_min_stance:
+            e.min_stance_s[lanes] = MIN_STANCE_MAX_S * np.maximum(a[:, 4], 0.0)
+
+    def knob_values(self) -> dict[str, Array]:
+        """Current physical value of every knob, per lane."""
+        e = self.engine
+        out = {
+            "omega_max": e.omega_max.copy(),
+            "delta_f_max": e.delta_f_max.copy(),
+            "process_noise_scale": e.process_noise_scale.copy(),
+            "zupt_noise_scale": e.zupt_noise_scale.copy(),
+        }
+        if self.config.tune_min_stance:
+            out["min_stance_s"] = e.min_stance_s.copy()
+        return out
+
+    # ------------------------------------------------------------------ step
+    def step(self, action: Any) -> tuple[Array, Array, NDArray[np.bool_], NDArray[np.bool_], dict]:
+        """Advance every lane by one decision interval."""
+        a = self.validate_action(action)
+        clipped = np.any(np.abs(a) > 1.0, axis=1)
+        self.clipped += clipped
+        self.action = np.clip(a, -1.0, 1.0)
+        self._apply_action(self.lanes)
+        e = self.engine
+        n, k = self.n, self.k
+        remaining = self.length - self.cursor
+        used = np.clip(remaining, 0, k)
+        idx = self.cursor[:, None] + np.arange(k)[None, :]
+        omega = self.omega[self.lanes[:, None], idx]  # (N, K, 3)
+        f = self.f[self.lanes[:, None], idx]
+        updates0, rejected0 = e.updates.copy(), e.rejected.copy()
+        nis_sum = np.zeros(n)
+        detected = np.zeros((n, k), dtype=bool)
+        starts = np.zeros(n, dtype=np.int64)
+        true_starts = np.zeros(n, dtype=np.int64)
+        est_end = e.mean_position()  # kept for lanes with no samples left
+        for j in range(k):
+            upd_before = e.updates.copy()
+            start, end = e.step(omega[:, j], f[:, j])
+            newly = e.updates > upd_before
+            nis_sum += np.where(newly, np.log1p(e.last_nis), 0.0)
+            detected[:, j] = e.detector.in_stance
+            starts += start
+            true_starts += start & self.true_stance[self.lanes, idx[:, j]]
+            # durations of completed detected stances (moving average)
+            self.stance_len = np.where(e.detector.in_stance, self.stance_len + 1, self.stance_len)
+            done_stance = end & (self.stance_len > 0)
+            if done_stance.any():
+                dur = self.stance_len * self.dt
+                self.stance_avg_s = np.where(
+                    done_stance,
+                    np.where(self.stance_avg_s > 0, 0.8 * self.stance_avg_s + 0.2 * dur, dur),
+                    self.stance_avg_s,
+                )
+                self.stance_len = np.where(done_stance, 0, self.stance_len)
+            ends_here = used == j + 1
+            if ends_here.any():
+                est_end[ends_here] = e.mean_position()[ends_here]
+        self.cursor += used
+        truth = self.pos[self.lanes, self.cursor]
+        err = np.linalg.norm(est_end[:, :2] - truth[:, :2], axis=1)
+        dist = self.distance[self.lanes, self.cursor]
+        bound = self.config.divergence_error_m + self.config.divergence_error_fraction * dist
+        terminated = e.diverged | (err > bound)
+        truncated = (self.cursor >= self.length) & ~terminated
+        weight = used / self.nav_samples
+        # On divergence the final error is held for the rest of the walk, so that
+        # stopping early never pays: the return stays minus the time-average.
+        tail = np.maximum(self.length - self.cursor, 0) / self.nav_samples
+        reward = -err * (weight + np.where(terminated, tail, 0.0))
+        self.last_error = err
+        new_updates = e.updates - updates0
+        interval = {
+            "omega": omega,
+            "f": f,
+            "used": used,
+            "detected": detected,
+            "starts": starts,
+            "nis_mean": np.where(new_updates > 0, nis_sum / np.maximum(new_updates, 1), 0.0),
+        }
+        self.obs = self._features(self.lanes, interval)
+        info = {
+            "pos_true": truth.copy(),
+            "pos_est": est_end,
+            "error": err,
+            "distance": dist,
+            "stance_detections": starts,
+            "true_stance_detections": true_starts,
+            "false_stance_detections": starts - true_starts,
+            "zupts": new_updates,
+            "zupts_rejected": e.rejected - rejected0,
+            "clipped_actions": self.clipped.copy(),
+            "covariance_repairs": e.repairs.copy(),
+            "diverged": e.diverged.copy(),
+            "reward_error": -err * weight,
+        }
+        return self.obs.copy(), reward, terminated, truncated, info
+
+    # ------------------------------------------------------------------ observation
+    def _features(self, lanes: NDArray[np.integer], interval: dict | None) -> NDArray[np.float32]:
+        e = self.engine
+        g = self.config.filter.g
+        b = len(lanes)
+        out = np.zeros((b, len(OBS_FEATURES)))
+        if interval is None:  # right after reset: statistics of the alignment window
+            omega = self.omega[lanes, : self.n_align]
+            f = self.f[lanes, : self.n_align]
+            mask = np.ones(omega.shape[:2], dtype=bool)
+            detected = np.zeros(omega.shape[:2], dtype=bool)
+            starts = np.zeros(b)
+            nis_mean = np.zeros(b)
+        else:
+            omega, f = interval["omega"], interval["f"]
+            mask = np.arange(omega.shape[1])[None, :] < np.maximum(interval["used"], 1)[:, None]
+            detected, starts, nis_mean = (
+                interval["detected"],
+                interval["starts"],
+                interval["nis_mean"],
+            )
+        cnt = mask.sum(axis=1)
+        wn = np.linalg.norm(omega, axis=-1)
+        an = np.linalg.norm(f, axis=-1) - g
+        for col, x in ((0, wn), (3, an)):
+            mean = np.where(mask, x, 0).sum(1) / cnt
+            var = np.where(mask, (x - mean[:, None]) ** 2, 0).sum(1) / cnt
+            out[:, col] = mean
+            out[:, col + 1] = np.sqrt(var)
+        out[:, 2] = np.where(mask, wn, 0).max(1)
+        out[:, 5] = np.where(mask, np.abs(an), 0).max(1)
+        out[:, 6] = np.where(mask, detected, False).sum(1) / cnt
+        out[:, 7] = starts
+        out[:, 8] = self.stance_avg_s[lanes]
+        out[:, 9] = e.time_since_update_s[lanes]
+        out[:, 10] = np.log1p(e.last_nis[lanes])
+        out[:, 11] = nis_mean
+        P = e.P[lanes]
+        diag = np.diagonal(P, axis1=1, axis2=2)
+        for col, sl in ((12, slice(0, 3)), (13, slice(3, 6)), (14, slice(6, 9))):
+            out[:, col] = np.log10(np.maximum(diag[:, sl].sum(1), 1e-12))
+        total = e.updates[lanes] + e.rejected[lanes]
+        out[:, 15] = np.where(total > 0, e.rejected[lanes] / np.maximum(total, 1), 0.0)
+        obs = np.concatenate((out, self.action[lanes]), axis=1)
+        return np.clip(obs, self.obs_low, self.obs_high).astype(np.float32)

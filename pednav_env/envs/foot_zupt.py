@@ -1,0 +1,335 @@
+"""``pednav/FootZupt-v0``: retune a foot-mounted ZUPT-UKF online (paper 003)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+
+from pednav_env.envs.foot_core import (
+    ACTION_KNOBS,
+    MIN_STANCE_MAX_S,
+    OBS_FEATURES,
+    FootZuptConfig,
+    FootZuptCore,
+)
+
+ENV_ID = "pednav/FootZupt-v0"
+
+
+def _make_config(config: FootZuptConfig | None, **overrides: Any) -> FootZuptConfig:
+    fields = {k: v for k, v in overrides.items() if v is not None}
+    if config is None:
+        return FootZuptConfig(**fields)
+    return replace(config, **fields) if fields else config
+
+
+def _spaces(config: FootZuptConfig, core: FootZuptCore) -> tuple[spaces.Box, spaces.Box]:
+    action = spaces.Box(-1.0, 1.0, (config.action_dim,), np.float32)
+    obs = spaces.Box(core.obs_low, core.obs_high, dtype=np.float32)
+    return action, obs
+
+
+class FootZuptEnv(gym.Env):
+    """
+    ## Description
+    A walker with an IMU on the foot walks a route; a zero-velocity-update
+    unscented Kalman filter (paper 003, Bolotin & Fatehrad 2015) tracks the
+    foot. Every ``decision_interval_s`` (0.5 s) of IMU data the agent retunes
+    the filter: the stance-detection thresholds of the paper's eq (5), the
+    process-noise and ZUPT-noise scales, and optionally a minimum stance
+    duration. It is scored on horizontal position error. Action 0 is exactly
+    the paper's fixed filter, so the zero policy is the paper baseline.
+
+    Episodes are drawn from the reset seed (domain randomisation): a route of
+    60–180 s with turns, stops (standing for 1–8 s) and gait changes between
+    slow walking, walking, fast walking and running; stance is not perfectly
+    still at speed (roll-over and micro-motion) and heel strikes shake the
+    IMU; the IMU grade is paper 003's, ADIS16405-like or consumer-grade with
+    random biases, scale factors and misalignments. ``scenario="paper"`` gives
+    paper 003's 5 m square with 1 m strides and its IMU.
+
+    ## Action Space
+    ``Box(-1, 1, (4,), float32)`` (``(5,)`` with ``tune_min_stance=True``).
+    Component i sets knob i to ``base_i · span_i ** a_i``:
+
+    | Num | Knob | Base (paper) | Span | Range | Unit |
+    |-----|------|--------------|------|-------|------|
+    | 0 | ω_max, eq (5) gyro threshold | 0.22 | 10 | 0.022–2.2 | rad/s |
+    | 1 | Δf_max, eq (5) vertical specific-force threshold | 0.33 | 10 | 0.033–3.3 | m/s² |
+    | 2 | process-noise scale (× paper Q) | 1 | 100 | 0.01–100 | 1 |
+    | 3 | ZUPT measurement-noise scale (× paper R) | 1 | 100 | 0.01–100 | 1 |
+    | 4 | minimum stance duration ``0.15 · max(a, 0)``, linear (a ≤ 0: none) | 0 | — | 0–0.15 | s |
+
+    Actions outside [-1, 1] are clipped and counted (``info["clipped_actions"]``);
+    wrong shapes, NaN or inf raise ``ValueError``.
+
+    ## Observation Space
+    ``Box(low, high, (16 + k,), float32)``, from the IMU and the filter only
+    (never the truth); values are clipped to the bounds below.
+
+    | Num | Observation | Min | Max | Unit |
+    |-----|-------------|-----|-----|------|
+    | 0 | mean \\|ω'\\| over the last interval | 0 | 50 | rad/s |
+    | 1 | std of \\|ω'\\| | 0 | 50 | rad/s |
+    | 2 | max \\|ω'\\| | 0 | 50 | rad/s |
+    | 3 | mean \\|f'\\| − g | −20 | 200 | m/s² |
+    | 4 | std of \\|f'\\| − g | 0 | 200 | m/s² |
+    | 5 | max \\|\\|f'\\| − g\\| | 0 | 200 | m/s² |
+    | 6 | fraction of the interval detected as stance | 0 | 1 | 1 |
+    | 7 | stance starts detected in the interval | 0 | 50 | 1 |
+    | 8 | moving average of detected stance durations | 0 | 20 | s |
+    | 9 | time since the last accepted ZUPT | 0 | 200 | s |
+    | 10 | log(1 + NIS) of the last ZUPT | 0 | 30 | 1 |
+    | 11 | mean log(1 + NIS) of the interval's ZUPTs (0 if none) | 0 | 30 | 1 |
+    | 12 | log₁₀ trace of the position covariance | −12 | 8 | log m² |
+    | 13 | log₁₀ trace of the velocity covariance | −12 | 8 | log (m/s)² |
+    | 14 | log₁₀ trace of the attitude covariance | −12 | 8 | log rad² |
+    | 15 | fraction of ZUPTs rejected by the χ² gate | 0 | 1 | 1 |
+    | 16… | the action in force (one entry per knob) | −1 | 1 | 1 |
+
+    Right after reset, entries 0–5 describe the 1 s alignment window.
+
+    ## Rewards
+    ``−e · Δ / D`` per step: e is the horizontal position error (m) at the end
+    of the interval, Δ the interval length and D the navigation duration of
+    the walk; the return is minus the time-averaged horizontal error (m).
+    ``info["reward_error"]`` carries that term.
+
+    ## Starting State
+    The walker stands for 1 s; the filter aligns on it (paper 003 eq 4:
+    position 0, velocity 0, heading 0, pitch and roll from the accelerometers)
+    and navigation starts at its end.
+
+    ## Episode End
+    - Truncation: the end of the walk.
+    - Termination (divergence): a non-finite or runaway filter state (speed
+      above 50 m/s), or horizontal error above 25 m + 25 % of the distance
+      walked. The final error is then held for the rest of the walk in the
+      last reward, so the return is still minus the time-averaged error and
+      diverging never pays.
+
+    ## Arguments
+    ``gymnasium.make("pednav/FootZupt-v0", scenario="random", decision_interval_s=0.5,
+    rate_hz=100.0, tune_min_stance=False, config=None, render_mode=None)``;
+    ``config`` is a full :class:`pednav_env.envs.foot_core.FootZuptConfig`.
+
+    ## Vectorized environment
+    ``gymnasium.make_vec("pednav/FootZupt-v0", num_envs=N,
+    vectorization_mode="vector_entry_point")`` gives :class:`FootZuptVectorEnv`:
+    all N walks step through one batched filter. Autoreset mode: SAME_STEP
+    (the reset observation is returned at once; the last one is in
+    ``info["final_obs"]``, its info in ``info["final_info"]``). Lane i of a
+    vector env reset with seed s plays the same episodes, bit for bit, as
+    this env reset with seed s + i.
+
+    ## Info
+    ``pos_true``, ``pos_est`` (m), ``error`` (m), ``distance`` walked (m),
+    ``stance_detections`` and their split into ``true_stance_detections`` /
+    ``false_stance_detections`` (against the simulated stances), ``zupts``,
+    ``zupts_rejected``, ``clipped_actions``, ``covariance_repairs``,
+    ``diverged``, ``reward_error``, ``imu_grade``, ``knobs`` (physical values).
+
+    ## Example
+    >>> import gymnasium as gym, numpy as np, pednav_env
+    >>> env = gym.make("pednav/FootZupt-v0", scenario="paper")
+    >>> obs, info = env.reset(seed=0)
+    >>> obs.shape
+    (20,)
+    >>> obs, reward, terminated, truncated, info = env.step(np.zeros(4, np.float32))
+    >>> bool(reward <= 0)
+    True
+
+    ## Version History
+    - v0: initial version.
+    """
+
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 4}
+
+    def __init__(
+        self,
+        scenario: str | None = None,
+        decision_interval_s: float | None = None,
+        rate_hz: float | None = None,
+        tune_min_stance: bool | None = None,
+        config: FootZuptConfig | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        self.config = _make_config(
+            config,
+            scenario=scenario,
+            decision_interval_s=decision_interval_s,
+            rate_hz=rate_hz,
+            tune_min_stance=tune_min_stance,
+        )
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"{ENV_ID}: render_mode must be one of "
+                f"{self.metadata['render_modes']}, got {render_mode!r}"
+            )
+        self.render_mode = render_mode
+        self.core = FootZuptCore(self.config, 1, ENV_ID)
+        self.action_space, self.observation_space = _spaces(self.config, self.core)
+        self._track_true: list[np.ndarray] = []
+        self._track_est: list[np.ndarray] = []
+        self._figure = None
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        self.core.reset_lanes(np.array([0]), [self.np_random])
+        self._track_true = [np.zeros(3)]
+        self._track_est = [np.zeros(3)]
+        return self.core.obs[0].copy(), self._info_reset()
+
+    def _info_reset(self) -> dict[str, Any]:
+        return {
+            "imu_grade": self.core.grade[0],
+            "distance": 0.0,
+            "error": 0.0,
+            "knobs": {k: float(v[0]) for k, v in self.core.knob_values().items()},
+        }
+
+    def step(self, action):
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != self.action_space.shape:
+            raise ValueError(
+                f"{ENV_ID}: action must have shape {self.action_space.shape}, got {a.shape}"
+            )
+        obs, reward, terminated, truncated, info = self.core.step(a[None, :])
+        out = {k: (v[0].copy() if np.ndim(v) > 1 else v[0].item()) for k, v in info.items()}
+        out["imu_grade"] = self.core.grade[0]
+        out["knobs"] = {k: float(v[0]) for k, v in self.core.knob_values().items()}
+        self._track_true.append(out["pos_true"])
+        self._track_est.append(out["pos_est"])
+        if self.render_mode == "human":
+            self.render()
+        return obs[0], float(reward[0]), bool(terminated[0]), bool(truncated[0]), out
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn(f"{ENV_ID}: render() called without a render_mode")
+            return None
+        import matplotlib
+
+        if self.render_mode == "rgb_array":
+            matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        if self._figure is None:
+            self._figure = plt.figure(figsize=(5, 5), dpi=80)
+        fig = self._figure
+        fig.clf()
+        ax = fig.add_subplot(111)
+        t = np.array(self._track_true)
+        e = np.array(self._track_est)
+        ax.plot(t[:, 0], t[:, 1], "k-", label="truth")
+        ax.plot(e[:, 0], e[:, 1], "r--", label="ZUPT-UKF")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("east (m)")
+        ax.set_ylabel("north (m)")
+        ax.legend(loc="upper right")
+        fig.canvas.draw()
+        if self.render_mode == "human":
+            plt.pause(0.001)
+            return None
+        return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+
+    def close(self):
+        if self._figure is not None:
+            import matplotlib.pyplot as plt
+
+            plt.close(self._figure)
+            self._figure = None
+
+
+class FootZuptVectorEnv(VectorEnv):
+    """Native vector version of :class:`FootZuptEnv` (see its docstring):
+    one batched filter for all ``num_envs`` walks, SAME_STEP autoreset."""
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        scenario: str | None = None,
+        decision_interval_s: float | None = None,
+        rate_hz: float | None = None,
+        tune_min_stance: bool | None = None,
+        config: FootZuptConfig | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        if render_mode is not None:
+            raise ValueError(f"{ENV_ID}: the vector env does not render; got {render_mode!r}")
+        self.config = _make_config(
+            config,
+            scenario=scenario,
+            decision_interval_s=decision_interval_s,
+            rate_hz=rate_hz,
+            tune_min_stance=tune_min_stance,
+        )
+        self.num_envs = int(num_envs)
+        self.core = FootZuptCore(self.config, self.num_envs, ENV_ID)
+        self.single_action_space, self.single_observation_space = _spaces(self.config, self.core)
+        self.action_space = spaces.Box(
+            -1.0, 1.0, (self.num_envs, self.config.action_dim), np.float32
+        )
+        self.observation_space = spaces.Box(
+            np.tile(self.core.obs_low, (self.num_envs, 1)),
+            np.tile(self.core.obs_high, (self.num_envs, 1)),
+            dtype=np.float32,
+        )
+        self.render_mode = None
+        self._lane_rngs: list[np.random.Generator] | None = None
+
+    def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None):
+        if isinstance(seed, int):
+            seeds = [seed + i for i in range(self.num_envs)]
+        elif seed is None:
+            seeds = [None] * self.num_envs
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"{ENV_ID}: {len(seeds)} seeds for {self.num_envs} envs")
+        if seed is not None or self._lane_rngs is None:
+            self._lane_rngs = [seeding.np_random(s)[0] for s in seeds]
+        self.core.reset_lanes(np.arange(self.num_envs), self._lane_rngs)
+        info = {"imu_grade": np.array(self.core.grade, dtype=object)}
+        return self.core.obs.copy(), info
+
+    def step(self, actions):
+        if self._lane_rngs is None:
+            raise RuntimeError(f"{ENV_ID}: call reset() before step()")
+        obs, reward, terminated, truncated, info = self.core.step(actions)
+        info["imu_grade"] = np.array(self.core.grade, dtype=object)
+        done = terminated | truncated
+        if done.any():
+            lanes = np.flatnonzero(done)
+            info["final_obs"] = np.full(self.num_envs, None, dtype=object)
+            info["final_info"] = np.full(self.num_envs, None, dtype=object)
+            for lane in lanes:
+                info["final_obs"][lane] = obs[lane].copy()
+                info["final_info"][lane] = {
+                    k: v[lane] for k, v in info.items() if k not in ("final_obs", "final_info")
+                }
+            info["_final_obs"] = done.copy()
+            info["_final_info"] = done.copy()
+            self.core.reset_lanes(lanes, [self._lane_rngs[i] for i in lanes])
+            obs = self.core.obs.copy()
+            info["imu_grade"] = np.array(self.core.grade, dtype=object)
+        return obs, reward.astype(np.float64), terminated, truncated, info
+
+
+# ACTION_KNOBS / MIN_STANCE_MAX_S / OBS_FEATURES are re-exported for documentation tools.
+__all__ = [
+    "ACTION_KNOBS",
+    "ENV_ID",
+    "MIN_STANCE_MAX_S",
+    "OBS_FEATURES",
+    "FootZuptEnv",
+    "FootZuptVectorEnv",
+]

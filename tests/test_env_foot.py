@@ -1,0 +1,201 @@
+"""``pednav/FootZupt-v0``: Gymnasium/SB3 API checks, determinism, scalar-vector
+equivalence, bad actions, a fuzz run, rewards, render, and a PPO smoke run."""
+
+import pickle
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+import pednav_env  # noqa: F401  (registers the environments)
+from pednav_env.envs.foot_core import FootZuptConfig
+from pednav_env.gait.foot_route import RouteRandomization
+from pednav_env.nav.zupt_ukf import ZuptUkf
+
+ENV_ID = "pednav/FootZupt-v0"
+SHORT = FootZuptConfig(route=RouteRandomization(duration_s=(12.0, 20.0)))
+
+
+def rollout(env, seed, actions=None, max_steps=10_000):
+    obs, _ = env.reset(seed=seed)
+    out = [obs]
+    rewards = []
+    for t in range(max_steps):
+        a = np.zeros(env.action_space.shape, np.float32) if actions is None else actions(t)
+        obs, r, term, trunc, info = env.step(a)
+        out.append(obs)
+        rewards.append(r)
+        if term or trunc:
+            break
+    return np.array(out), np.array(rewards), info
+
+
+def test_gymnasium_and_sb3_checkers_pass_without_warnings():
+    env = gym.make(ENV_ID, config=SHORT)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gym_check_env(env.unwrapped)
+        sb3_check_env(env, warn=True)
+
+
+def test_same_seed_same_episode():
+    env = gym.make(ENV_ID, config=SHORT)
+    a = rollout(env, 3)
+    b = rollout(env, 3)
+    c = rollout(env, 4)
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1], b[1])
+    assert a[0].shape != c[0].shape or not np.array_equal(a[0], c[0])
+
+
+def test_vector_lanes_equal_scalar_envs_bit_for_bit():
+    n, seed = 3, 20
+    venv = gym.make_vec(ENV_ID, num_envs=n, vectorization_mode="vector_entry_point", config=SHORT)
+    assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    obs, _ = venv.reset(seed=seed)
+    lane_obs = [[obs[i]] for i in range(n)]
+    lane_rew = [[] for _ in range(n)]
+    episodes_done = np.zeros(n, dtype=int)
+    rng = np.random.default_rng(0)
+    actions = []
+    while episodes_done.min() < 2:  # two episodes per lane: covers autoreset
+        a = rng.uniform(-1, 1, (n, 4)).astype(np.float32)
+        actions.append(a)
+        obs, r, term, trunc, info = venv.step(a)
+        for i in range(n):
+            lane_rew[i].append(r[i])
+            if term[i] or trunc[i]:
+                lane_obs[i].append(info["final_obs"][i])
+                episodes_done[i] += 1
+            lane_obs[i].append(obs[i])
+    for i in range(n):
+        env = gym.make(ENV_ID, config=SHORT).unwrapped
+        obs_s, _ = env.reset(seed=seed + i)
+        got_obs, got_rew = [obs_s], []
+        for a in actions:
+            o, r, term, trunc, _ = env.step(a[i])
+            got_obs.append(o)
+            got_rew.append(r)
+            if term or trunc:
+                o, _ = env.reset()  # next episode from the same generator
+                got_obs.append(o)
+        np.testing.assert_array_equal(np.array(got_obs), np.array(lane_obs[i]))
+        np.testing.assert_array_equal(np.array(got_rew), np.array(lane_rew[i]))
+
+
+def test_return_is_minus_the_time_averaged_error():
+    """Independent bookkeeping: run the engine over the episode's IMU record and
+    average its horizontal error at the ends of the decision intervals."""
+    env = gym.make(ENV_ID, scenario="paper").unwrapped
+    _, rewards, info = rollout(env, 0)
+    core = env.core
+    t = int(core.length[0])
+    engine = ZuptUkf(core.config.filter, core.config.rate_hz, 1)
+    run = engine.run(core.omega[:, :t], core.f[:, :t])
+    k0, k = run.start_sample, core.k
+    ends = list(range(k0 + k, t, k)) + [t]
+    weights = np.diff([k0, *ends]) / (t - k0)
+    err = np.linalg.norm(run.x[0, ends, :2] - core.pos[0, ends, :2], axis=1)
+    assert rewards.sum() == pytest.approx(-(weights * err).sum(), rel=1e-9)
+    assert info["error"] == pytest.approx(err[-1], rel=1e-9)
+    assert info["distance"] > 19.0  # the 5 m square
+
+
+@pytest.mark.parametrize(
+    "bad", [np.zeros(3), np.zeros((1, 4)), np.array([0, np.nan, 0, 0]), np.array([np.inf, 0, 0, 0])]
+)
+def test_bad_actions_raise_with_the_env_name(bad):
+    env = gym.make(ENV_ID, config=SHORT).unwrapped
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=ENV_ID):
+        env.step(bad)
+
+
+def test_out_of_range_actions_are_clipped_and_counted():
+    env = gym.make(ENV_ID, config=SHORT).unwrapped
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.array([3.0, -2.0, 0.0, 1.0]))
+    assert info["clipped_actions"] == 1
+    assert info["knobs"]["omega_max"] == pytest.approx(0.22 * 10.0)
+    assert info["knobs"]["delta_f_max"] == pytest.approx(0.33 / 10.0)
+    _, _, _, _, info = env.step(np.zeros(4))
+    assert info["clipped_actions"] == 1
+
+
+def test_fuzz_random_and_extreme_actions_over_whole_episodes():
+    env = gym.make(ENV_ID, config=SHORT, tune_min_stance=True).unwrapped
+    rng = np.random.default_rng(99)
+    corners = np.array(np.meshgrid(*[[-1.0, 1.0]] * 5)).reshape(5, -1).T
+    policies = [
+        lambda t: rng.uniform(-1, 1, 5),
+        lambda t: rng.choice([-1e6, -1.0, 1.0, 1e6], 5),
+        lambda t: corners[t % len(corners)],
+    ]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        for seed, policy in enumerate(policies):
+            obs, rewards, _info = rollout(env, seed, policy)
+            assert np.all(np.isfinite(obs)) and np.all(np.isfinite(rewards))
+            assert env.observation_space.contains(obs[-1])
+            assert np.all(rewards <= 0)
+
+
+def test_paper_scenario_and_action_zero_is_the_paper_filter():
+    env = gym.make(ENV_ID, scenario="paper").unwrapped
+    obs, info = env.reset(seed=1)
+    assert info["imu_grade"] == "paper003"
+    assert info["knobs"] == {
+        "omega_max": 0.22,
+        "delta_f_max": 0.33,
+        "process_noise_scale": 1.0,
+        "zupt_noise_scale": 1.0,
+    }
+    assert env.core.engine.config.calibrate_gyro_bias is False
+    assert obs.shape == (20,)
+
+
+def test_render_rgb_array_and_pickling():
+    env = gym.make(ENV_ID, config=SHORT, render_mode="rgb_array")
+    env.reset(seed=0)
+    env.step(np.zeros(4, np.float32))
+    frame = env.render()
+    assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
+    assert frame.std() > 0
+    env.close()
+    clone = pickle.loads(pickle.dumps(gym.make(ENV_ID, config=SHORT).unwrapped))
+    obs, _ = clone.reset(seed=5)
+    assert obs.shape == (20,)
+
+
+def test_bad_configuration_raises():
+    with pytest.raises(ValueError, match="scenario"):
+        gym.make(ENV_ID, scenario="moon")
+    with pytest.raises(ValueError, match="decision_interval_s"):
+        gym.make(ENV_ID, decision_interval_s=0.0)
+    with pytest.raises(ValueError, match="rate_hz"):
+        gym.make(ENV_ID, rate_hz=-100.0)
+    with pytest.raises(ValueError, match="imu_grades"):
+        FootZuptConfig(imu_grades=("nope",), imu_grade_weights=(1.0,))
+
+
+def test_ppo_trains_for_2000_steps():
+    from stable_baselines3 import PPO
+
+    env = gym.make(ENV_ID, config=SHORT)
+    model = PPO(
+        "MlpPolicy",
+        env,
+        n_steps=256,
+        batch_size=64,
+        n_epochs=2,
+        seed=0,
+        policy_kwargs={"net_arch": [32, 32]},
+        device="cpu",
+    )
+    model.learn(2000)
+    assert model.num_timesteps >= 2000
+    action, _ = model.predict(env.reset(seed=1)[0], deterministic=True)
+    assert action.shape == (4,)
