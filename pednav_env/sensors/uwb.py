@@ -1,0 +1,287 @@
+"""UWB marker position measurements (paper 001, thesis chapter 3 and eq 5.5).
+
+A DecaWave DW1000 two-way-ranging system reports each tag's position; the
+thesis models the reported coordinates as the truth plus independent Gaussian
+errors of σ = 0.1 m per axis (its indoor accuracy "of the order of 10 cm",
+eq 5.5). That is :meth:`UwbSpec.paper`.
+
+The realistic option (:meth:`UwbSpec.realistic`) adds, per marker:
+
+- non-line-of-sight bursts: a two-state Markov chain (Gilbert–Elliott) per
+  marker, entered at ``nlos_start_rate_hz`` starts per second of line of
+  sight and left after ``nlos_mean_duration`` on average (per-sample
+  probabilities 1 − exp(−rate·T) and T/duration, so the statistics do not
+  depend on the sample rate); during a burst the position carries a bias
+  drawn once per burst, N(0, ``nlos_bias_std``²) per axis, and the noise is
+  inflated by ``nlos_noise_scale``;
+- outliers: with probability ``outlier_prob`` a sample gets an extra
+  N(0, ``outlier_std``²) error per axis;
+- dropped samples: with probability ``drop_prob`` (``nlos_drop_prob`` inside
+  a burst) the sample is missing.
+
+Dropped samples are reported through the boolean ``valid`` mask, never as
+NaN; the value array holds the last valid measurement of that marker there
+(what a host that re-reads a stale position sees), or the first valid one
+before any arrives, or 0 when a marker never reports. Consumers must use
+``valid``. ``nlos`` and ``outlier`` are truth diagnostics for analysis and
+must not be fed to a filter.
+
+Walker i draws only from its own generator ``rngs[i]``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+Array = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+
+def _require_nonneg(name: str, value: float) -> None:
+    if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+
+
+def _require_prob(name: str, value: float) -> None:
+    _require_nonneg(name, value)
+    if value > 1:
+        raise ValueError(f"{name} must be a probability in [0, 1], got {value!r}")
+
+
+@dataclass(frozen=True)
+class UwbSpec:
+    """UWB position sensor.
+
+    Attributes
+    ----------
+    rate_hz : float
+        Position update rate (Hz). Not in the thesis; 10 Hz is the location
+        rate of DecaWave's TWR RTLS firmware (DWM1001 PANS maximum).
+    noise_std : float
+        σ (m) of the position error per axis, thesis eq 5.5 (DecaWave 0.1 m).
+    nlos_start_rate_hz : float
+        Mean number of NLOS bursts starting per second of line of sight.
+    nlos_mean_duration : float
+        Mean NLOS burst length (s).
+    nlos_bias_std : float
+        σ (m) per axis of the bias held during one burst.
+    nlos_noise_scale : float
+        Factor ≥ 1 on ``noise_std`` during a burst.
+    nlos_drop_prob : float
+        Probability that a sample inside a burst is dropped.
+    outlier_prob : float
+        Probability per sample of an outlier.
+    outlier_std : float
+        σ (m) per axis of an outlier's extra error.
+    drop_prob : float
+        Probability that a line-of-sight sample is dropped.
+    """
+
+    rate_hz: float = 10.0  # ours: DecaWave TWR RTLS location rate (DWM1001 PANS max 10 Hz)
+    noise_std: float = 0.1  # thesis eq 5.5 and §3.3: DecaWave indoor accuracy ≈ 10 cm
+    nlos_start_rate_hz: float = 0.0  # thesis: no NLOS
+    nlos_mean_duration: float = 1.0  # ours (realistic option)
+    nlos_bias_std: float = 0.3  # ours: NLOS excess paths of tens of cm
+    nlos_noise_scale: float = 2.0  # ours: weaker first path, noisier
+    nlos_drop_prob: float = 0.0  # thesis: no dropped samples
+    outlier_prob: float = 0.0  # thesis: no outliers
+    outlier_std: float = 1.0  # ours (realistic option)
+    drop_prob: float = 0.0  # thesis: no dropped samples
+
+    def __post_init__(self) -> None:
+        if not (
+            isinstance(self.rate_hz, (int, float))
+            and math.isfinite(self.rate_hz)
+            and self.rate_hz > 0
+        ):
+            raise ValueError(f"UwbSpec.rate_hz must be > 0, got {self.rate_hz!r}")
+        for name in ("noise_std", "nlos_bias_std", "outlier_std"):
+            _require_nonneg(f"UwbSpec.{name}", getattr(self, name))
+        _require_nonneg("UwbSpec.nlos_start_rate_hz", self.nlos_start_rate_hz)
+        for name in ("nlos_drop_prob", "outlier_prob", "drop_prob"):
+            _require_prob(f"UwbSpec.{name}", getattr(self, name))
+        _require_nonneg("UwbSpec.nlos_mean_duration", self.nlos_mean_duration)
+        if self.nlos_mean_duration < self.sample_period:
+            raise ValueError(
+                "UwbSpec.nlos_mean_duration must be >= one sample period "
+                f"({self.sample_period} s), got {self.nlos_mean_duration!r}"
+            )
+        _require_nonneg("UwbSpec.nlos_noise_scale", self.nlos_noise_scale)
+        if self.nlos_noise_scale < 1:
+            raise ValueError(
+                f"UwbSpec.nlos_noise_scale must be >= 1, got {self.nlos_noise_scale!r}"
+            )
+
+    @property
+    def sample_period(self) -> float:
+        """T = 1/rate (s)."""
+        return 1.0 / self.rate_hz
+
+    @property
+    def nlos_enter_prob(self) -> float:
+        """Per-sample probability of starting a burst, 1 − exp(−rate·T)."""
+        return -math.expm1(-self.nlos_start_rate_hz * self.sample_period)
+
+    @property
+    def nlos_exit_prob(self) -> float:
+        """Per-sample probability of leaving a burst, T / mean duration."""
+        return min(1.0, self.sample_period / self.nlos_mean_duration)
+
+    @property
+    def is_ideal(self) -> bool:
+        """True when only the Gaussian noise is active (the thesis model)."""
+        return self.nlos_start_rate_hz == 0.0 and self.outlier_prob == 0.0 and self.drop_prob == 0.0
+
+    @classmethod
+    def paper(cls, rate_hz: float = 10.0) -> UwbSpec:
+        """Thesis model: Gaussian σ = 0.1 m per axis, nothing else (eq 5.5)."""
+        return cls(rate_hz=rate_hz)
+
+    @classmethod
+    def realistic(cls, rate_hz: float = 10.0) -> UwbSpec:
+        """Our indoor-walk error mix: NLOS bursts, outliers, dropped samples.
+
+        0.2 bursts per second of line of sight lasting 1 s on average (≈ 17 %
+        of the time in NLOS), 1 % outliers, 2 % drops in LOS and 30 % in NLOS.
+        These are illustrative magnitudes, not fitted to any data set.
+        """
+        return cls(
+            rate_hz=rate_hz,
+            nlos_start_rate_hz=0.2,
+            nlos_drop_prob=0.3,
+            outlier_prob=0.01,
+            drop_prob=0.02,
+        )
+
+
+@dataclass(frozen=True)
+class UwbMeasurements:
+    """UWB readings of a batch of walks.
+
+    Attributes
+    ----------
+    z : ndarray, shape (N, K, 2, 2)
+        Reported positions (m): marker (heel, knee), then (x, z). Finite
+        everywhere; at dropped samples a held value (see module docstring).
+    valid : ndarray of bool, shape (N, K, 2)
+        False where the marker's sample was dropped.
+    nlos : ndarray of bool, shape (N, K, 2)
+        Truth diagnostic: sample inside an NLOS burst.
+    outlier : ndarray of bool, shape (N, K, 2)
+        Truth diagnostic: sample is an outlier.
+    """
+
+    z: Array
+    valid: BoolArray
+    nlos: BoolArray
+    outlier: BoolArray
+
+
+def _check_rngs(rngs: Sequence[np.random.Generator], n_walkers: int) -> None:
+    if isinstance(rngs, np.random.Generator) or len(rngs) != n_walkers:
+        raise ValueError(
+            f"rngs must be a sequence of {n_walkers} numpy Generators (one per walker), "
+            f"got {rngs!r}"
+        )
+    for i, rng in enumerate(rngs):
+        if not isinstance(rng, np.random.Generator):
+            raise ValueError(f"rngs[{i}] must be a numpy.random.Generator, got {rng!r}")
+
+
+def hold_last_valid(z: ArrayLike, valid: ArrayLike) -> Array:
+    """Replace dropped samples by the marker's last valid one.
+
+    Parameters
+    ----------
+    z : array_like, shape (N, K, 2, 2)
+        Positions (m).
+    valid : array_like of bool, shape (N, K, 2)
+        Per-marker validity.
+
+    Returns
+    -------
+    ndarray, shape (N, K, 2, 2)
+        ``z`` with each invalid sample replaced by the last valid one of its
+        marker, or by the first valid one before any, or by 0 if none.
+    """
+    z = np.asarray(z, dtype=float)
+    valid = np.asarray(valid, dtype=bool)
+    k = valid.shape[1]
+    idx = np.where(valid, np.arange(k)[None, :, None], -1)
+    np.maximum.accumulate(idx, axis=1, out=idx)
+    first = np.argmax(valid, axis=1)  # (N, 2): first valid index (0 if none)
+    idx = np.where(idx < 0, first[:, None, :], idx)
+    held = np.take_along_axis(z, idx[..., None], axis=1)
+    never = ~valid.any(axis=1)  # (N, 2)
+    held[np.broadcast_to(never[:, None, :, None], held.shape)] = 0.0
+    return held
+
+
+def measure_uwb(
+    spec: UwbSpec, markers: ArrayLike, rngs: Sequence[np.random.Generator]
+) -> UwbMeasurements:
+    """Simulate UWB position reports of the markers.
+
+    Parameters
+    ----------
+    spec : UwbSpec
+        Sensor model; ``markers`` must be sampled at ``spec.rate_hz``.
+    markers : array_like, shape (N, K, 2, 2)
+        True positions (m): marker, then (x, z).
+    rngs : sequence of numpy.random.Generator, length N
+        One generator per walker. Walker i draws, in order: the Gaussian noise
+        (K, 2, 2); then, only with the realistic option, NLOS transitions
+        (K, 2), burst biases (K, 2, 2), outlier flags (K, 2), outlier errors
+        (K, 2, 2) and drop uniforms (K, 2).
+
+    Returns
+    -------
+    UwbMeasurements
+    """
+    truth = np.asarray(markers, dtype=float)
+    if truth.ndim != 4 or truth.shape[2:] != (2, 2):
+        raise ValueError(f"markers must have shape (N, K, 2, 2), got {truth.shape}")
+    if not np.all(np.isfinite(truth)):
+        raise ValueError("markers must be finite (found NaN or inf)")
+    n, k = truth.shape[:2]
+    _check_rngs(rngs, n)
+
+    noise = np.empty_like(truth)
+    nlos = np.zeros((n, k, 2), dtype=bool)
+    outlier = np.zeros((n, k, 2), dtype=bool)
+    dropped = np.zeros((n, k, 2), dtype=bool)
+    bias = np.zeros_like(truth)
+    extra = np.zeros_like(truth)
+    for i, rng in enumerate(rngs):
+        noise[i] = spec.noise_std * rng.standard_normal((k, 2, 2))
+        if spec.is_ideal:
+            continue
+        u_state = rng.random((k, 2))
+        burst_bias = spec.nlos_bias_std * rng.standard_normal((k, 2, 2))
+        out_flag = rng.random((k, 2)) < spec.outlier_prob
+        out_err = spec.outlier_std * rng.standard_normal((k, 2, 2))
+        u_drop = rng.random((k, 2))
+        state = np.zeros(2, dtype=bool)
+        current_bias = np.zeros((2, 2))
+        for j in range(k):  # Markov chain: tiny (K, 2) loop, generation only
+            enter = ~state & (u_state[j] < spec.nlos_enter_prob)
+            leave = state & (u_state[j] < spec.nlos_exit_prob)
+            current_bias = np.where(enter[:, None], burst_bias[j], current_bias)
+            state = (state | enter) & ~leave
+            nlos[i, j] = state
+            bias[i, j] = np.where(state[:, None], current_bias, 0.0)
+        outlier[i] = out_flag
+        extra[i] = np.where(out_flag[..., None], out_err, 0.0)
+        dropped[i] = u_drop < np.where(nlos[i], spec.nlos_drop_prob, spec.drop_prob)
+
+    scale = np.where(nlos, spec.nlos_noise_scale, 1.0)[..., None]
+    z = truth + scale * noise + bias + extra
+    valid = ~dropped
+    if dropped.any():
+        z = hold_last_valid(z, valid)
+    return UwbMeasurements(z=z, valid=valid, nlos=nlos, outlier=outlier)
