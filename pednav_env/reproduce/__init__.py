@@ -17,7 +17,13 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 #: Paper ids with a reproduction module, mapped to the module name.
-PAPERS: dict[str, str] = {"003": "paper003", "001": "paper001"}
+PAPERS: dict[str, str] = {
+    "000": "paper000",
+    "001": "paper001",
+    "002": "paper002",
+    "003": "paper003",
+    "004": "paper004",
+}
 
 
 @dataclass(frozen=True)
