@@ -4,6 +4,10 @@ Subcommands (their JSON formats are contracts, see DESIGN.md):
 
 - ``pednav reproduce ID [--runs N] [--seed S] [--json] [--plots DIR]`` — a
   paper's figures beside ours.
+- ``pednav evaluate ENV_ID --policy NAME [NAME ...] --episodes N --seed S
+  [--json] [--scenario NAME]`` — policies on the same held-out episodes.
+- ``pednav bench ENV [--json] [--sizes N ...]`` — env steps/s of the native
+  vector env against a filterpy reference (ENV = foot, waist, marker).
 """
 
 from __future__ import annotations
@@ -30,6 +34,24 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_evaluate(args: argparse.Namespace) -> int:
+    from agents.evaluate import evaluate, format_table
+
+    env_kwargs = {"scenario": args.scenario} if args.scenario else {}
+    result = evaluate(args.env_id, args.policy, args.episodes, args.seed, env_kwargs)
+    print(json.dumps(result) if args.json else format_table(result))
+    return 0
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from agents import bench
+
+    kwargs = {"sizes": tuple(args.sizes)} if args.sizes else {}
+    result = bench.run(args.env, **kwargs)
+    print(json.dumps(result) if args.json else bench.format_table(result))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pednav",
@@ -49,6 +71,37 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--json", action="store_true", help="print one JSON object (DESIGN.md)")
     rep.add_argument("--plots", metavar="DIR", default=None, help="write figures to DIR")
     rep.set_defaults(func=_cmd_reproduce)
+
+    ev = sub.add_parser("evaluate", help="evaluate tuning policies on held-out episodes")
+    ev.add_argument("env_id", help="e.g. pednav/FootZupt-v0")
+    ev.add_argument(
+        "--policy",
+        nargs="+",
+        required=True,
+        help="policy names (paper) or paths to saved SB3 models",
+    )
+    ev.add_argument("--episodes", type=_positive_int, default=100, help="episodes (default 100)")
+    ev.add_argument(
+        "--seed",
+        type=int,
+        default=5000,
+        help="first episode seed; episodes use seed … seed+N-1 (default 5000)",
+    )
+    ev.add_argument("--scenario", default=None, help="env scenario, e.g. random or paper")
+    ev.add_argument("--json", action="store_true", help="print one JSON object (DESIGN.md)")
+    ev.set_defaults(func=_cmd_evaluate)
+
+    be = sub.add_parser("bench", help="throughput of a native vector env vs filterpy")
+    be.add_argument("env", help="foot, waist or marker")
+    be.add_argument(
+        "--sizes",
+        type=_positive_int,
+        nargs="+",
+        default=None,
+        help="numbers of environments (default 1 16 64 256)",
+    )
+    be.add_argument("--json", action="store_true", help="print one JSON object (DESIGN.md)")
+    be.set_defaults(func=_cmd_bench)
     return parser
 
 

@@ -302,9 +302,12 @@ class FootZuptCore:
         starts = np.zeros(n, dtype=np.int64)
         true_starts = np.zeros(n, dtype=np.int64)
         est_end = e.mean_position()  # kept for lanes with no samples left
+        omega_c, dqT, f_mid = e.increments(omega, f)  # the whole interval at once
         for j in range(k):
             upd_before = e.updates.copy()
-            start, end = e.step(omega[:, j], f[:, j])
+            start, end = e.step(
+                omega[:, j], f[:, j], increments=(omega_c[:, j], dqT[:, j], f_mid[:, j])
+            )
             newly = e.updates > upd_before
             nis_sum += np.where(newly, np.log1p(e.last_nis), 0.0)
             detected[:, j] = e.detector.in_stance

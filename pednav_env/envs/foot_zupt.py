@@ -287,9 +287,10 @@ class FootZuptVectorEnv(VectorEnv):
         self._lane_rngs: list[np.random.Generator] | None = None
 
     def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None):
-        if isinstance(seed, int):
-            seeds = [seed + i for i in range(self.num_envs)]
-        elif seed is None:
+        if isinstance(seed, int | np.integer):
+            seeds = [int(seed) + i for i in range(self.num_envs)]
+        elif seed is None or all(s is None for s in seed):
+            seed = None
             seeds = [None] * self.num_envs
         else:
             seeds = list(seed)

@@ -11,9 +11,11 @@ heel in foot axes, so that (paper 003, the formulas after Fig. 6)::
     a_x = B_zxᵀ (ω × ω × r_OM + ω̇ × r_OM) + r̈_CO
     f_z = B_zx a_x − B_zx g_x
 
-Here each moving phase (Γ₁ + Γ₂ + Γ₃) is one clamped C² cubic spline
-(``scipy.interpolate.CubicSpline``, zero rate at both stances) through the
-knots; stances are constant pieces. The paper scenario uses exactly its knots
+Here each moving phase (Γ₁ + Γ₂ + Γ₃) is one clamped C² cubic spline (zero
+rate at both stances; all swings of a walk solved at once by
+:func:`pednav_env.gait.splines.clamped_cubic_coefficients`, checked against
+``scipy.interpolate.CubicSpline``) through the knots; stances are constant
+pieces; the whole walk is one ``scipy.interpolate.PPoly``. The paper scenario uses exactly its knots
 (stance, mid-swing). The ``realistic`` routes add, beyond the paper:
 
 - knots at toe-off (foot pitched toes-down, rotated about the toe) and at
@@ -38,16 +40,16 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import CubicSpline, PPoly
+from scipy.interpolate import PPoly
 
 from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.gait.foot_route import Gait, Route
+from pednav_env.gait.splines import clamped_cubic_coefficients
 from pednav_env.rotations import (
     body_angular_acceleration_from_euler,
     body_rates_from_euler,
     euler_to_dcm,
 )
-from pednav_env.sensors.imu import ideal_specific_force
 
 Array = NDArray[np.float64]
 
@@ -106,7 +108,7 @@ class FootTrajectory:
 
     States on the grid t_m = m Δt, m = 0 … T (``(N, T+1, ·)``); ideal IMU
     readings for sample m are the means of body rate and specific force over
-    [t_m, t_{m+1}] (3-point Gauss–Legendre), as an integrating IMU reports
+    [t_m, t_{m+1}] (2-point Gauss–Legendre), as an integrating IMU reports
     them (``(N, T, 3)``). The navigation origin is the IMU's initial position.
     """
 
@@ -152,19 +154,21 @@ class _Schedule:
 def _build_schedule(route: Route) -> _Schedule:
     """Piecewise polynomial of heel position and Euler angles for one walk."""
     breaks: list[float] = [0.0]
-    coefs: list[Array] = []
+    pieces: list[Array | int] = []  # constant stance coefficients, or a swing index
     pos = np.zeros(3)
     psi = 0.0
     t = 0.0
     stances: list[tuple[float, float, float, float]] = []
     strikes: list[tuple[float, float, Array]] = []
     spans: list[tuple[float, float, int]] = []
+    swing_t: list[list[float]] = []
+    swing_y: list[list[Array]] = []
 
     def add_constant(until: float, value: Array) -> None:
         nonlocal t
         c = np.zeros((4, 1, 6))
         c[3, 0] = value
-        coefs.append(c)
+        pieces.append(c)
         breaks.append(until)
         t = until
 
@@ -201,8 +205,9 @@ def _build_schedule(route: Route) -> _Schedule:
             knots_t = [t0, t0 + sh.heel_off_s, t_mid, t_hs, t_end]
             knots_y = [pose, toe_off, mid, strike, end]
             strikes.append((t_hs, sh.speed, _direction(psi_next)))
-        cs = CubicSpline(np.asarray(knots_t), np.asarray(knots_y), bc_type="clamped")
-        coefs.append(cs.c)
+        pieces.append(len(swing_t))
+        swing_t.append(knots_t)
+        swing_y.append(knots_y)
         breaks.extend(knots_t[1:])
         spans.append((t0, t_end, int(sh.gait)))
         t = t_end
@@ -212,11 +217,22 @@ def _build_schedule(route: Route) -> _Schedule:
     if stance_len > 0:
         add_constant(t + stance_len, final)
         stances.append((t - stance_len, t, 0.0, stance_len))
+    coefs: list[Array] = []
+    if swing_t:
+        n_int = len(swing_t[0]) - 1
+        swing_c = clamped_cubic_coefficients(np.asarray(swing_t), np.asarray(swing_y))
+        for p in pieces:
+            if isinstance(p, int):
+                coefs.append(swing_c[:, p * n_int : (p + 1) * n_int])
+            else:
+                coefs.append(p)
+    else:
+        coefs = [p for p in pieces if not isinstance(p, int)]
     pp = PPoly(np.concatenate(coefs, axis=1), np.asarray(breaks), extrapolate=True)
     return _Schedule(pp, stances, strikes, spans)
 
 
-def _sin2_window(t: Array, start: float, end: float) -> tuple[Array, Array, Array]:
+def _sin2_window(t: Array, start: Array, end: Array) -> tuple[Array, Array, Array]:
     """w = sin²(πs), s = (t − start)/(end − start), and its first two time derivatives."""
     d = end - start
     s = np.clip((t - start) / d, 0.0, 1.0)
@@ -231,54 +247,55 @@ def _add_realism(sched: _Schedule, route: Route, t: Array, y: list[Array]) -> No
     """Add stance roll-over, micro-motion and heel-strike transients in place.
 
     ``y`` = [value, first derivative, second derivative], each (len(t), 6).
-    Each effect touches only the samples of its own interval (sorted slicing).
+    Vectorised: every time is matched to its stance window and its latest
+    heel strike with ``searchsorted`` (windows and transients never overlap).
     """
-    phases = route.seed_phases or (0.0, 0.0, 0.0)
+    phases = np.asarray(route.seed_phases or (0.0, 0.0, 0.0))
     freqs = 2 * np.pi * np.array([9.0, 11.0, 13.0])
-    order = np.argsort(t, kind="stable")
-    t_sorted = t[order]
-
-    def between(a: float, b: float, closed_left: bool = False) -> NDArray[np.intp]:
-        lo = np.searchsorted(t_sorted, a, side="left" if closed_left else "right")
-        hi = np.searchsorted(t_sorted, b, side="left")
-        return order[lo:hi]
-
-    for start, end, speed, nominal in sched.stance_intervals:
-        if speed <= 0:
-            continue
-        w_start = max(start, end - nominal)
-        sel = between(w_start, end)
-        if sel.size == 0:
-            continue
+    windows = np.array(
+        [(max(s, e - nominal), e, v) for s, e, v, nominal in sched.stance_intervals if v > 0]
+    )
+    if windows.size:
+        ws, we, speed = windows.T
+        k = np.searchsorted(ws, t, side="right") - 1
+        kk = np.maximum(k, 0)
+        sel = np.flatnonzero((k >= 0) & (t > ws[kk]) & (t < we[kk]))
+        k = kk[sel]
         ts = t[sel]
-        w, w1, w2 = _sin2_window(ts, w_start, end)
-        amp = 0.011 * speed**2
+        w, w1, w2 = _sin2_window(ts, ws[k], we[k])
+        amp = 0.011 * speed[k] ** 2  # roll-over pitch bump (rad)
         y[0][sel, 4] += amp * w
         y[1][sel, 4] += amp * w1
         y[2][sel, 4] += amp * w2
-        a_mm = 2e-4 * speed**2
-        for j in range(3):
-            arg = freqs[j] * ts + phases[j]
-            sn, cs = np.sin(arg), np.cos(arg)
-            y[0][sel, j] += a_mm * w * sn
-            y[1][sel, j] += a_mm * (w1 * sn + w * freqs[j] * cs)
-            y[2][sel, j] += a_mm * (w2 * sn + 2 * w1 * freqs[j] * cs - w * freqs[j] ** 2 * sn)
-    lam = _HS_LAMBDA
-    for t_hs, speed, forward in sched.strike_times:
-        sel = between(t_hs, t_hs + 12 * _HS_TAU, closed_left=True)
-        if sel.size == 0:
-            continue
-        s = (t[sel] - t_hs) / _HS_TAU
+        a_mm = (2e-4 * speed[k] ** 2)[:, None]  # heel micro-motion (m)
+        arg = ts[:, None] * freqs[None, :] + phases[None, :]
+        sn, cs = np.sin(arg), np.cos(arg)
+        w, w1, w2 = w[:, None], w1[:, None], w2[:, None]
+        y[0][sel, :3] += a_mm * w * sn
+        y[1][sel, :3] += a_mm * (w1 * sn + w * freqs * cs)
+        y[2][sel, :3] += a_mm * (w2 * sn + 2 * w1 * freqs * cs - w * freqs**2 * sn)
+    if sched.strike_times:
+        ths = np.array([s[0] for s in sched.strike_times])
+        speed = np.array([s[1] for s in sched.strike_times])
+        forward = np.array([s[2] for s in sched.strike_times])
+        k = np.searchsorted(ths, t, side="right") - 1
+        kk = np.maximum(k, 0)
+        sel = np.flatnonzero((k >= 0) & (t - ths[kk] < 12 * _HS_TAU))
+        k = kk[sel]
+        lam = _HS_LAMBDA
+        s = (t[sel] - ths[k]) / _HS_TAU
         e = np.exp(lam * s)
-        B = 10.0 * speed**2 * _HS_TAU**2 / _HS_PEAK
-        p0 = B * np.imag(s**2 * e)
-        p1 = B / _HS_TAU * np.imag((2 * s + lam * s**2) * e)
-        p2 = B / _HS_TAU**2 * np.imag((2 + 4 * lam * s + lam**2 * s**2) * e)
-        direction = np.array([0.5 * forward[0], 0.5 * forward[1], 1.0])
-        for j in range(3):
-            y[0][sel, j] += direction[j] * p0
-            y[1][sel, j] += direction[j] * p1
-            y[2][sel, j] += direction[j] * p2
+        B = 10.0 * speed[k] ** 2 * _HS_TAU**2 / _HS_PEAK
+        p = np.stack(
+            (
+                B * np.imag(s**2 * e),
+                B / _HS_TAU * np.imag((2 * s + lam * s**2) * e),
+                B / _HS_TAU**2 * np.imag((2 + 4 * lam * s + lam**2 * s**2) * e),
+            )
+        )
+        direction = np.stack((0.5 * forward[k, 0], 0.5 * forward[k, 1], np.ones(len(k))), -1)
+        for d in range(3):
+            y[d][sel, :3] += p[d][:, None] * direction
 
 
 def imu_kinematics(
@@ -298,7 +315,9 @@ def imu_kinematics(
     pos = heel[0] + np.einsum("...ij,...j->...i", C_nb, r)
     vel = heel[1] + np.einsum("...ij,...j->...i", C_nb, w_x_r)
     acc = heel[2] + np.einsum("...ij,...j->...i", C_nb, rel_acc)
-    f_b = ideal_specific_force(acc, euler[0], g)
+    a_minus_g = acc.copy()
+    a_minus_g[..., 2] += g
+    f_b = np.einsum("...ji,...j->...i", C_nb, a_minus_g)  # C_nbᵀ (a − g_vec)
     return pos, vel, acc, omega, f_b
 
 
@@ -317,8 +336,9 @@ def simulate_foot(
     durations = np.array([r.duration_s for r in routes])
     n_samples = int(math.ceil(durations.max() * cfg.rate_hz - 1e-9))
     t_grid = np.arange(n_samples + 1) * dt
-    # Sensor sample m = mean over [t_m, t_m+1] by 3-point Gauss–Legendre quadrature.
-    gl_nodes, gl_weights = np.polynomial.legendre.leggauss(3)
+    # Sensor sample m = mean over [t_m, t_m+1] by 2-point Gauss–Legendre
+    # quadrature (exact for cubics; O(Δt⁴) for the trigonometric kinematics).
+    gl_nodes, gl_weights = np.polynomial.legendre.leggauss(2)
     t_gauss = (t_grid[:-1, None] + 0.5 * dt * (1.0 + gl_nodes[None, :])).ravel()
     t_all = np.concatenate((t_grid, t_gauss))
     lever = np.asarray(cfg.lever_arm_m, dtype=float)
@@ -347,8 +367,8 @@ def simulate_foot(
         p, v, _, w, f = imu_kinematics(heel, e, lever, cfg.g)
         k = n_samples + 1
         pos[i], vel[i], eul[i] = p[:k], v[:k], e[0][:k]
-        omega[i] = np.einsum("tgc,g->tc", w[k:].reshape(n_samples, 3, 3), 0.5 * gl_weights)
-        f_b[i] = np.einsum("tgc,g->tc", f[k:].reshape(n_samples, 3, 3), 0.5 * gl_weights)
+        omega[i] = np.einsum("tgc,g->tc", w[k:].reshape(n_samples, -1, 3), 0.5 * gl_weights)
+        f_b[i] = np.einsum("tgc,g->tc", f[k:].reshape(n_samples, -1, 3), 0.5 * gl_weights)
         starts = np.array([iv[0] for iv in sched.stance_intervals])
         ends = np.array([iv[1] for iv in sched.stance_intervals])
         lo, hi = t_grid[:-1], t_grid[1:]

@@ -191,3 +191,32 @@ def update(
     KSK = np.einsum("bij,bjk,blk->bil", K, S, K) * accepted[:, None, None]
     P = symmetrize(P_prior - KSK)
     return UpdateResult(x, P, y, S, nis, accepted)
+
+
+def update_linear(
+    x_prior: Array,
+    P_prior: Array,
+    measured: list[int],
+    z: Array,
+    R: Array,
+    add_x: ResidualFn | None = None,
+    gate_nis: float | Array | None = None,
+) -> UpdateResult:
+    """UKF update for a linear h(x) = x[measured], batched.
+
+    Sigma points drawn from (x⁻, P⁻) and passed through a linear h give
+    exactly ẑ = h(x⁻), S = H P⁻ Hᵀ + R and P_xz = P⁻ Hᵀ, so this is the same
+    update as :func:`update` on redrawn prior sigma points (filterpy 2.0) —
+    without drawing them. The filterpy oracle test checks the equality.
+    """
+    m = np.asarray(measured)
+    S = P_prior[:, m[:, None], m[None, :]] + R
+    Pxz = P_prior[:, :, m]
+    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(Pxz, -1, -2)), -1, -2)
+    y = z - x_prior[:, m]
+    nis = np.einsum("bi,bi->b", y, np.linalg.solve(S, y[..., None])[..., 0])
+    accepted = np.ones(len(y), dtype=bool) if gate_nis is None else nis <= gate_nis
+    Ky = np.einsum("bij,bj->bi", K, y) * accepted[:, None]
+    x = x_prior + Ky if add_x is None else add_x(x_prior, Ky)
+    KSK = np.einsum("bij,bjk,blk->bil", K, S, K) * accepted[:, None, None]
+    return UpdateResult(x, symmetrize(P_prior - KSK), y, S, nis, accepted)

@@ -29,7 +29,8 @@ Choices the paper leaves open (docs/REPRODUCTION.md):
 - like filterpy 2.0 (the oracle), the measurement step uses sigma points
   redrawn from the prior (which includes Q), not the propagated ones the
   paper prints (which would leave Q out of S); with the linear h the update
-  is then exactly the Kalman update on the unscented prior;
+  is then exactly the Kalman update on the unscented prior, which is how it
+  is computed (:func:`pednav_env.nav.ukf.update_linear`, no second draw);
 - optional χ² gating of a ZUPT on its NIS (off in the paper scenario).
 """
 
@@ -57,7 +58,7 @@ from pednav_env.nav.ukf import (
     repair_covariance,
     sigma_points,
     unscented_transform,
-    update,
+    update_linear,
 )
 from pednav_env.rotations import euler_to_quat, quat_rotate, quat_to_euler, wrap_angle
 from pednav_env.sensors.imu import DriftModel, ImuSpec
@@ -362,15 +363,31 @@ class ZuptUkf:
         self.elapsed_s[idx] = 0.0
 
     # ------------------------------------------------------------------ step
+    def increments(self, omega_b: Array, f_b: Array) -> tuple[Array, Array, Array]:
+        """Per-sample quantities shared by a walker's sigma points, for any
+        number of samples at once: bias-corrected rate, Δq matrix, specific
+        force at mid-interval attitude (``omega_b``/``f_b`` (N, ..., 3))."""
+        bias = self.gyro_bias.reshape((self.n,) + (1,) * (omega_b.ndim - 2) + (3,))
+        omega_c = omega_b - bias
+        dqT, f_mid = step_increments(omega_c, f_b, self.dt)
+        return omega_c, dqT, f_mid
+
     def step(
-        self, omega_b: Array, f_b: Array, shoe_statistic: Array | None = None
+        self,
+        omega_b: Array,
+        f_b: Array,
+        shoe_statistic: Array | None = None,
+        increments: tuple[Array, Array, Array] | None = None,
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         """Advance all walkers by one IMU sample ``(N, 3)`` each.
 
-        Returns the detected (stance_start, stance_end) events of this sample.
+        ``increments`` may carry :meth:`increments` of this sample, computed
+        ahead for many samples at once. Returns the detected (stance_start,
+        stance_end) events of this sample.
         """
-        omega_b = omega_b - self.gyro_bias
-        dqT, f_mid = step_increments(omega_b, f_b, self.dt)
+        if increments is None:
+            increments = self.increments(omega_b, f_b)
+        omega_b, dqT, f_mid = increments
         if self.uses_shoe:
             if shoe_statistic is None:
                 raise ValueError("the SHOE detector needs shoe_statistic for each sample")
@@ -402,9 +419,14 @@ class ZuptUkf:
         return start, end
 
     def _check_divergence(self) -> None:
-        speed2 = np.einsum("nsi,nsi->ns", self.sig_v, self.sig_v).max(axis=1)
+        # The central sigma point stands for the walker: sigma points are drawn
+        # within a few mm of it, and a non-finite one reaches it at the next update.
+        v0 = self.sig_v[:, 0]
+        speed2 = np.einsum("ni,ni->n", v0, v0)
         bad = ~np.isfinite(speed2) | (speed2 > DIVERGENCE_SPEED**2)
-        bad |= ~np.isfinite(self.sig_q).all(axis=(1, 2)) | ~np.isfinite(self.sig_p).all(axis=(1, 2))
+        bad |= ~np.isfinite(self.sig_q[:, 0]).all(axis=1) | ~np.isfinite(self.sig_p[:, 0]).all(
+            axis=1
+        )
         new = bad & ~self.diverged
         if new.any():
             self.diverged |= new
@@ -422,8 +444,6 @@ class ZuptUkf:
             c.assumed_imu, self.rate_hz, self.elapsed_s[idx], self.process_noise_scale[idx]
         )
         x_prior, P_prior = unscented_transform(sig, W, Q, state_mean, state_residual)
-        chi, bad = sigma_points(x_prior, P_prior, W, add_fn=state_add)
-        self.repairs[idx] += bad
         b = len(idx)
         z = np.zeros((b, 4))
         z[:, 0] = self.height_ref[idx]
@@ -435,9 +455,8 @@ class ZuptUkf:
         )
         R = np.zeros((b, 4, 4))
         R[:, np.arange(4), np.arange(4)] = r[None, :] * self.zupt_noise_scale[idx, None]
-        res = update(
-            x_prior, P_prior, chi, measure(chi), z, R, W, state_residual, state_add, self.gate_nis
-        )
+        # h is linear: the update on prior sigma points is the Kalman update (update_linear).
+        res = update_linear(x_prior, P_prior, MEASURED, z, R, state_add, self.gate_nis)
         self.updates[idx] += res.accepted
         self.rejected[idx] += ~res.accepted
         self.last_nis[idx] = res.nis
