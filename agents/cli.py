@@ -46,7 +46,9 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 def _cmd_bench(args: argparse.Namespace) -> int:
     from agents import bench
 
-    kwargs = {"sizes": tuple(args.sizes)} if args.sizes else {}
+    kwargs: dict = {"sizes": tuple(args.sizes)} if args.sizes else {}
+    if args.seconds is not None:
+        kwargs["min_seconds"] = kwargs["reference_seconds"] = args.seconds
     result = bench.run(args.env, **kwargs)
     print(json.dumps(result) if args.json else bench.format_table(result))
     return 0
@@ -99,6 +101,12 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="+",
         default=None,
         help="numbers of environments (default 1 16 64 256)",
+    )
+    be.add_argument(
+        "--seconds",
+        type=float,
+        default=None,
+        help="minimum timed seconds per measurement (default 3)",
     )
     be.add_argument("--json", action="store_true", help="print one JSON object (DESIGN.md)")
     be.set_defaults(func=_cmd_bench)

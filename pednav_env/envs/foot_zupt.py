@@ -204,8 +204,9 @@ class FootZuptEnv(gym.Env):
         out = {k: (v[0].copy() if np.ndim(v) > 1 else v[0].item()) for k, v in info.items()}
         out["imu_grade"] = self.core.grade[0]
         out["knobs"] = {k: float(v[0]) for k, v in self.core.knob_values().items()}
-        self._track_true.append(out["pos_true"])
-        self._track_est.append(out["pos_est"])
+        if self.render_mode is not None:  # the track is kept only for rendering
+            self._track_true.append(out["pos_true"])
+            self._track_est.append(out["pos_est"])
         if self.render_mode == "human":
             self.render()
         return obs[0], float(reward[0]), bool(terminated[0]), bool(truncated[0]), out

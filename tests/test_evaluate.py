@@ -1,0 +1,162 @@
+"""Evaluation (pednav evaluate), the SB3 VecEnv adapter and the bench command."""
+
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from agents.bench import bench_foot
+from agents.cli import main
+from agents.evaluate import evaluate, load_policy, run_episodes
+from agents.sb3_vec import NativeVecEnv
+from baselines import PaperPolicy
+from pednav_env.envs.foot_core import FootZuptConfig
+from pednav_env.gait.foot_route import RouteRandomization
+
+ENV_ID = "pednav/FootZupt-v0"
+SHORT = {"config": FootZuptConfig(route=RouteRandomization(duration_s=(10.0, 15.0)))}
+
+
+def scalar_rollout(seed):
+    """Independent path: the scalar env, one episode, zero actions."""
+    env = gym.make(ENV_ID, **SHORT)
+    env.reset(seed=seed)
+    total = 0.0
+    while True:
+        _, r, term, trunc, info = env.step(np.zeros(4, np.float32))
+        total += r
+        if term or trunc:
+            return -total, info, term
+
+
+def test_episodes_match_scalar_rollouts_seed_by_seed():
+    res = run_episodes(ENV_ID, PaperPolicy(gym.make(ENV_ID).action_space), 3, 700, SHORT)
+    for i, r in enumerate(res):
+        err, info, term = scalar_rollout(700 + i)
+        assert r.seed == 700 + i
+        assert r.mean_error == pytest.approx(err, rel=1e-6)
+        assert r.final_error == pytest.approx(info["error"], rel=1e-9)
+        assert r.distance == pytest.approx(info["distance"], rel=1e-9)
+        assert r.diverged == term
+
+
+def test_evaluate_json_has_the_contract_keys_and_paired_stats(tmp_path):
+    from stable_baselines3 import PPO
+
+    model = PPO(
+        "MlpPolicy",
+        gym.make(ENV_ID, **SHORT),
+        n_steps=64,
+        batch_size=32,
+        n_epochs=1,
+        seed=0,
+        policy_kwargs={"net_arch": [16]},
+        device="cpu",
+    )
+    model.learn(64)
+    path = tmp_path / "tiny.zip"
+    model.save(path)
+    out = evaluate(ENV_ID, ["paper", str(path)], 3, 5000, SHORT)
+    assert set(out) == {"env", "episodes", "seed", "policies"}
+    assert out["env"] == ENV_ID and out["episodes"] == 3 and out["seed"] == 5000
+    names = [p["name"] for p in out["policies"]]
+    assert names == ["paper", str(path)]
+    for p in out["policies"]:
+        assert set(p) == {
+            "name",
+            "mean_error",
+            "ci95",
+            "final_error_pct",
+            "divergence_rate",
+            "vs_paper",
+        }
+        lo, hi = p["ci95"]
+        assert lo <= p["mean_error"] <= hi
+        assert 0.0 <= p["divergence_rate"] <= 1.0
+    paper, learned = out["policies"]
+    assert paper["vs_paper"] == {"mean_diff": 0.0, "p_value": None}
+    assert learned["vs_paper"]["mean_diff"] == pytest.approx(
+        learned["mean_error"] - paper["mean_error"], abs=1e-9
+    )
+    assert 0.0 <= learned["vs_paper"]["p_value"] <= 1.0
+
+
+def test_cli_evaluate_and_errors(capsys):
+    assert (
+        main(
+            [
+                "evaluate",
+                ENV_ID,
+                "--policy",
+                "paper",
+                "--episodes",
+                "2",
+                "--scenario",
+                "paper",
+                "--json",
+            ]
+        )
+        == 0
+    )
+    out = json.loads(capsys.readouterr().out)
+    assert out["policies"][0]["name"] == "paper" and out["episodes"] == 2
+    assert main(["evaluate", ENV_ID, "--policy", "oracle", "--episodes", "1"]) == 2
+    assert "unknown policy" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="no such model"):
+        load_policy("missing.zip", gym.make(ENV_ID).action_space)
+
+
+def test_paper_policy_shapes():
+    space = gym.make(ENV_ID).action_space
+    pol = PaperPolicy(space)
+    a, state = pol.predict(np.zeros(20, np.float32))
+    assert a.shape == (4,) and not a.any() and state is None
+    a, _ = pol.predict(np.zeros((7, 20), np.float32))
+    assert a.shape == (7, 4)
+    with pytest.raises(ValueError, match="Box"):
+        PaperPolicy(gym.spaces.Discrete(3))
+
+
+def test_sb3_adapter_autoreset_and_ppo():
+    from stable_baselines3 import PPO
+
+    venv = gym.make_vec(ENV_ID, num_envs=3, vectorization_mode="vector_entry_point", **SHORT)
+    vec = NativeVecEnv(venv)
+    vec.seed(11)
+    obs = vec.reset()
+    assert obs.shape == (3, 20)
+    seen_done = False
+    for _ in range(40):
+        obs, rew, dones, infos = vec.step(np.zeros((3, 4), np.float32))
+        assert rew.dtype == np.float32 and len(infos) == 3
+        for d, info in zip(dones, infos, strict=True):
+            if d:
+                seen_done = True
+                assert info["terminal_observation"].shape == (20,)
+                assert isinstance(info["TimeLimit.truncated"], bool)
+    assert seen_done
+    model = PPO(
+        "MlpPolicy",
+        vec,
+        n_steps=32,
+        batch_size=48,
+        n_epochs=1,
+        seed=0,
+        policy_kwargs={"net_arch": [16]},
+        device="cpu",
+    )
+    model.learn(192)
+    assert model.num_timesteps >= 192
+
+
+def test_bench_reports_rows_in_the_contract_format(capsys):
+    out = bench_foot(sizes=(2,), min_seconds=0.05, reference_seconds=0.05, config=SHORT["config"])
+    assert out["bench"] == "foot"
+    (row,) = out["rows"]
+    assert set(row) == {"num_envs", "steps_per_s", "reference_steps_per_s", "ratio"}
+    assert row["num_envs"] == 2 and row["steps_per_s"] > 0 and row["reference_steps_per_s"] > 0
+    assert row["ratio"] == pytest.approx(row["steps_per_s"] / row["reference_steps_per_s"])
+    assert main(["bench", "foot", "--sizes", "1", "--seconds", "0.05", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["rows"][0]["num_envs"] == 1
+    assert main(["bench", "legs"]) == 2
