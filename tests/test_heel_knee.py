@@ -106,7 +106,7 @@ def test_constant_parameters_make_both_kinematics_agree() -> None:
 
 
 def test_paper_kinematics_are_rough_late_in_a_walk_integrated_are_not() -> None:
-    # Mechanism documented in docs/REPRODUCTION_001.md: eq 4.10 multiplies the
+    # Mechanism documented in docs/REPRODUCTION.md (paper 001): eq 4.10 multiplies the
     # parameters' sample-to-sample jitter by kT. With τ = 10 s, T = 0.1 s a
     # deviation jumps per sample by sqrt(1 − d²) ≈ 0.141 of its stationary std
     # (σ_c = 0.520 m/s, σ_ω = 1.555 rad/s), so for t in [15, 20] s (rms 17.5 s)

@@ -214,7 +214,7 @@ def test_filter_is_statistically_consistent_in_a_mildly_nonlinear_regime() -> No
     # N = 300 walkers the mean NEES at the last step is χ²(6N)/N and the mean
     # NIS over all N·(K−1) updates χ²(4N(K−1))/(N(K−1)); the bands are their
     # two-sided 99.9 % quantiles. (At the thesis's 17 % spread the EKF's phase
-    # linearisation breaks and NEES inflates: docs/REPRODUCTION_001.md.)
+    # linearisation breaks and NEES inflates: docs/REPRODUCTION.md (paper 001).)
     gait = HeelKneeConfig(
         param_corr_time=1000.0, param_var_ratio=0.003, initial_deviation="stationary"
     )

@@ -1,4 +1,4 @@
-"""Small reproductions of papers 000, 002 and 004 (full sizes: docs/REPRODUCTION_000_002_004.md)."""
+"""Small reproductions of papers 000, 002 and 004 (full sizes: docs/REPRODUCTION.md)."""
 
 from __future__ import annotations
 

@@ -14,7 +14,7 @@ from pednav_env.reproduce import paper001
 
 COORDS = ("heel_x", "heel_z", "knee_x", "knee_z")
 
-#: Full-size result documented in docs/REPRODUCTION_001.md
+#: Full-size result documented in docs/REPRODUCTION.md (paper 001)
 #: (``paper001.run()``: 4000 walks, seed 0), in COORDS order.
 DOC_EKF = np.array([0.04547, 0.01277, 0.03699, 0.01382])
 DOC_LOWPASS = np.array([0.09990, 0.09163, 0.09714, 0.09176])

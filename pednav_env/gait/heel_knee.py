@@ -246,7 +246,7 @@ class HeelKneeConfig:
     sample_period: float = 0.1  # ours: 10 Hz DecaWave TWR location rate
     param_var_ratio: float = 0.03  # thesis eq 5.4
     # Ours (not in the thesis): long enough that eq 4.10's kT-amplified jitter adds
-    # ≤ ~10 % of c_x⁰ to the heel speed after 10 s; docs/REPRODUCTION_001.md.
+    # ≤ ~10 % of c_x⁰ to the heel speed after 10 s; docs/REPRODUCTION.md (paper 001).
     param_corr_time: float = 1e4
     kinematics: Literal["paper", "integrated"] = "paper"  # thesis eq 4.10
     initial_deviation: Literal["zero", "stationary"] = "zero"  # thesis eq 5.6
@@ -311,7 +311,7 @@ class HeelKneeConfig:
 
     @classmethod
     def paper(cls) -> HeelKneeConfig:
-        """The thesis setup (every default; see docs/REPRODUCTION_001.md)."""
+        """The thesis setup (every default; see docs/REPRODUCTION.md (paper 001))."""
         return cls()
 
 

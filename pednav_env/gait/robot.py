@@ -26,7 +26,7 @@ under which the paper's eq (9) becomes :func:`pednav_env.rotations.body_rates_fr
 and its matrix B(ψ, ϑ, γ) becomes C_nbᵀ (verified in ``tests/test_robot.py``).
 The robot therefore starts heading north and turns left (west, south, east).
 
-Choices where the paper is silent (docs/REPRODUCTION_000_002_004.md):
+Choices where the paper is silent (docs/REPRODUCTION.md (papers 000/002/004)):
 the corner turn is exactly π/2 in ``turn_duration`` (the paper's 1.57 s⁻¹ is
 π/2 rounded); the path direction is ψ* (yaw oscillation Δψ sways the body,
 not the path); the lateral speed is along the body's left axis of the path

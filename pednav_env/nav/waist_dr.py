@@ -17,7 +17,7 @@ Integration rule (paper 000). The printed double integrals ∫₀ᵀ∫₀ᵀ a 
 read as nested running integrals, V(t) = V(0) + ∫₀ᵗ a, then ∫₀ᵀ V(t) dt, each
 by the trapezoid rule on the samples t = 0, Δt, …, T (both ends included) —
 the reading that reproduces paper 000's printed V̄ = 1.39994406 and
-1.39999891 m/s to all eight digits (docs/REPRODUCTION_000_002_004.md).
+1.39999891 m/s to all eight digits (docs/REPRODUCTION.md (papers 000/002/004)).
 """
 
 from __future__ import annotations
@@ -76,7 +76,7 @@ def euler_rates_transpose_hypothesis(euler: ArrayLike, omega_b: ArrayLike) -> Ar
         γ̇' = ω_x
 
     so a pitched body turning in yaw accumulates a roll error −∫ψ̇ sin θ dt.
-    Not the printed scheme (docs/REPRODUCTION_000_002_004.md).
+    Not the printed scheme (docs/REPRODUCTION.md (papers 000/002/004)).
     """
     e = np.asarray(euler, dtype=float)
     w = np.asarray(omega_b, dtype=float)

@@ -6,7 +6,7 @@ filter", and prints the RMS errors of x₁, z₁ (heel) and x₂, z₂ (knee):
 EKF 0.0575, 0.0072, 0.0572, 0.0078 m; low-pass 0.0701, 0.0324, 0.0308,
 0.0400 m; "the synthesised filter is 1.5 times more accurate".
 
-Our scenario (every choice and its reason: docs/REPRODUCTION_001.md):
+Our scenario (every choice and its reason: docs/REPRODUCTION.md (paper 001)):
 
 - truth: the thesis's own model, eq 4.10 literally with the deviations of
   eq 4.11 (``kinematics="paper"``), starting at the nominal values (eq 5.6);

@@ -16,7 +16,7 @@ instants), ``:delayed_projection`` (C_nb(i−1) in eq 15), ``:kinematic_transpos
 (Mᵀ instead of M⁻¹ in eq 14), ``:grid_aligned_transpose`` (both) and
 ``:quaternion`` (paper 003's quaternion
 mechanisation, :mod:`pednav_env.nav.strapdown`, on the same sensor data).
-Mechanisms: docs/REPRODUCTION_000_002_004.md.
+Mechanisms: docs/REPRODUCTION.md (papers 000/002/004).
 """
 
 from __future__ import annotations
@@ -174,7 +174,7 @@ def run(
         f"sweep amplitudes (deg): {', '.join(f'{a:g}' for a in amps)}; dt = {dt} s; "
         "ideal sensors; R = |estimate − truth| at the first sample after the route's end",
         "contract rows: printed scheme (9)–(17) on the continuous-time robot; suffixed rows are "
-        "hypotheses/variants, not the printed scheme (docs/REPRODUCTION_000_002_004.md)",
+        "hypotheses/variants, not the printed scheme (docs/REPRODUCTION.md (papers 000/002/004))",
     ]
     if plot_dir is not None:
         _plots(Path(plot_dir), amps, results, dt, g)

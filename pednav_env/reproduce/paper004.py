@@ -17,7 +17,7 @@ numbers (the same standard-normal draws scaled by each σ_a); per step only
 the statistics over runs are kept (mean and std of e = δV − δV̂, the RMS of
 the position error E − Ê), so memory stays flat.
 
-Readings (docs/REPRODUCTION_000_002_004.md): filter x̂(0) = (0.3 m/s, 0,
+Readings (docs/REPRODUCTION.md (papers 000/002/004)): filter x̂(0) = (0.3 m/s, 0,
 0.1 °/h) — the printed ε̂(0) = 0.1 "1/s" read as 0.1 °/h — and P(0) =
 diag(0.3², (1 mrad)², (0.1 °/h)²) (not printed); the true x(0) is drawn from
 N(0, P(0)), so e(0) has covariance P(0) and mean −x̂(0): the mean error
