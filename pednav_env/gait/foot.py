@@ -53,6 +53,8 @@ from pednav_env.rotations import (
 
 Array = NDArray[np.float64]
 
+#: Samples evaluated at once (bounds memory on long walks).
+_CHUNK_SAMPLES = 50_000
 #: Heel-to-toe-pivot distance used for the toe-off knot (m).
 FOOT_LENGTH_M = 0.18
 #: Heel-strike transient time constant τ (s) and complex exponent λ.
@@ -340,7 +342,6 @@ def simulate_foot(
     # quadrature (exact for cubics; O(Δt⁴) for the trigonometric kinematics).
     gl_nodes, gl_weights = np.polynomial.legendre.leggauss(2)
     t_gauss = (t_grid[:-1, None] + 0.5 * dt * (1.0 + gl_nodes[None, :])).ravel()
-    t_all = np.concatenate((t_grid, t_gauss))
     lever = np.asarray(cfg.lever_arm_m, dtype=float)
 
     n = len(routes)
@@ -354,21 +355,27 @@ def simulate_foot(
     gait = np.zeros((n, n_samples), dtype=np.int8)
     for i, route in enumerate(routes):
         sched = _build_schedule(route)
-        t_eval = np.minimum(t_all, sched.pp.x[-1])
-        y = [sched.pp(t_eval, nu) for nu in range(3)]
-        # Past the end of the walk the foot stands still.
-        after = t_all > sched.pp.x[-1]
-        y[1][after] = 0.0
-        y[2][after] = 0.0
-        if route.realistic:
-            _add_realism(sched, route, t_all, y)
-        heel = [yy[:, :3] for yy in y]
-        e = [yy[:, [3, 4, 5]] for yy in y]
-        p, v, _, w, f = imu_kinematics(heel, e, lever, cfg.g)
-        k = n_samples + 1
-        pos[i], vel[i], eul[i] = p[:k], v[:k], e[0][:k]
-        omega[i] = np.einsum("tgc,g->tc", w[k:].reshape(n_samples, -1, 3), 0.5 * gl_weights)
-        f_b[i] = np.einsum("tgc,g->tc", f[k:].reshape(n_samples, -1, 3), 0.5 * gl_weights)
+        t_end = sched.pp.x[-1]
+        # Evaluate in chunks of samples so that memory stays bounded on long walks.
+        for a in range(0, n_samples, _CHUNK_SAMPLES):
+            b = min(a + _CHUNK_SAMPLES, n_samples)
+            g_hi = b + 1 if b == n_samples else b
+            t_chunk = np.concatenate((t_grid[a:g_hi], t_gauss[2 * a : 2 * b]))
+            t_eval = np.minimum(t_chunk, t_end)
+            y = [sched.pp(t_eval, nu) for nu in range(3)]
+            after = t_chunk > t_end  # past the end of the walk the foot stands still
+            y[1][after] = 0.0
+            y[2][after] = 0.0
+            if route.realistic:
+                _add_realism(sched, route, t_chunk, y)
+            heel = [yy[:, :3] for yy in y]
+            e = [yy[:, [3, 4, 5]] for yy in y]
+            p, v, _, w, f = imu_kinematics(heel, e, lever, cfg.g)
+            ng = g_hi - a
+            pos[i, a:g_hi], vel[i, a:g_hi], eul[i, a:g_hi] = p[:ng], v[:ng], e[0][:ng]
+            half_w = 0.5 * gl_weights
+            omega[i, a:b] = np.einsum("tgc,g->tc", w[ng:].reshape(b - a, -1, 3), half_w)
+            f_b[i, a:b] = np.einsum("tgc,g->tc", f[ng:].reshape(b - a, -1, 3), half_w)
         starts = np.array([iv[0] for iv in sched.stance_intervals])
         ends = np.array([iv[1] for iv in sched.stance_intervals])
         lo, hi = t_grid[:-1], t_grid[1:]
@@ -379,11 +386,15 @@ def simulate_foot(
             & (lo >= starts[np.maximum(idx, 0)] - 1e-12)
             & (hi <= ends[np.maximum(idx, 0)] + 1e-12)
         )
-        inside |= lo >= sched.pp.x[-1] - 1e-12
+        inside |= lo >= t_end - 1e-12
         stance[i] = inside
         gait_step[i] = np.maximum(idx, 0)
-        for s0, s1, gl in sched.gait_spans:
-            gait[i, (lo >= s0 - 1e-12) & (lo < s1 - 1e-12)] = gl
+        if sched.gait_spans:
+            s0, s1, labels = (np.array(col) for col in zip(*sched.gait_spans, strict=True))
+            j = np.searchsorted(s0, lo + 1e-12, side="right") - 1
+            jj = np.maximum(j, 0)
+            in_span = (j >= 0) & (lo < s1[jj] - 1e-12)
+            gait[i] = np.where(in_span, labels[jj], int(Gait.STANDING))
         gait[i, inside] = int(Gait.STANDING)
     pos -= pos[:, :1].copy()
     return FootTrajectory(
