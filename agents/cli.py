@@ -6,6 +6,9 @@ Subcommands (their JSON formats are contracts, see DESIGN.md):
   paper's figures beside ours.
 - ``pednav evaluate ENV_ID --policy NAME [NAME ...] --episodes N --seed S
   [--json] [--scenario NAME]`` — policies on the same held-out episodes.
+- ``pednav train ENV_ID --algo ppo|sac [--timesteps N] [--seed S] [--n-envs K]
+  [--config FILE] [--run-dir DIR] [--resume]`` — train a tuner (SB3).
+- ``pednav tune ENV_ID`` — CMA-ES search of the tuned-fixed baseline.
 - ``pednav bench ENV [--json] [--sizes N ...]`` — env steps/s of the native
   vector env against a filterpy reference (ENV = foot, waist, marker).
 """
@@ -40,6 +43,42 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     env_kwargs = {"scenario": args.scenario} if args.scenario else {}
     result = evaluate(args.env_id, args.policy, args.episodes, args.seed, env_kwargs)
     print(json.dumps(result) if args.json else format_table(result))
+    return 0
+
+
+def _cmd_train(args: argparse.Namespace) -> int:
+    from agents.train import train
+
+    run_dir = train(
+        args.env_id,
+        args.algo,
+        args.timesteps,
+        args.seed,
+        args.n_envs,
+        args.config,
+        args.run_dir,
+        args.resume,
+        progress_bar=not args.no_progress,
+    )
+    print(f"saved {run_dir / 'model.zip'} (+ vecnormalize.pkl, meta.json)")
+    return 0
+
+
+def _cmd_tune(args: argparse.Namespace) -> int:
+    import gymnasium as gym
+
+    from baselines.tuned import search
+
+    action_dim = gym.make(args.env_id).action_space.shape[0]
+    result = search(
+        args.env_id,
+        action_dim,
+        episodes=args.episodes,
+        generations=args.generations,
+        popsize=args.popsize,
+        seed=args.seed,
+    )
+    print(json.dumps(result, indent=2))
     return 0
 
 
@@ -92,6 +131,31 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--scenario", default=None, help="env scenario, e.g. random or paper")
     ev.add_argument("--json", action="store_true", help="print one JSON object (DESIGN.md)")
     ev.set_defaults(func=_cmd_evaluate)
+
+    tr = sub.add_parser("train", help="train a filter tuner with Stable-Baselines3")
+    tr.add_argument("env_id", help="e.g. pednav/FootZupt-v0")
+    tr.add_argument("--algo", choices=("ppo", "sac"), default="ppo")
+    tr.add_argument(
+        "--timesteps",
+        type=_positive_int,
+        default=None,
+        help="env steps (default: the hyperparameter file's n_timesteps)",
+    )
+    tr.add_argument("--seed", type=int, default=0, help="training run seed (0 … 9999)")
+    tr.add_argument("--n-envs", type=_positive_int, default=None, help="parallel lanes")
+    tr.add_argument("--config", default=None, help="hyperparameter YAML (RL-Zoo style)")
+    tr.add_argument("--run-dir", default=None, help="output dir (default runs/ENV/ALGO_seedS)")
+    tr.add_argument("--resume", action="store_true", help="continue from the newest checkpoint")
+    tr.add_argument("--no-progress", action="store_true", help="no progress bar")
+    tr.set_defaults(func=_cmd_train)
+
+    tu = sub.add_parser("tune", help="search the best constant action (tuned-fixed baseline)")
+    tu.add_argument("env_id")
+    tu.add_argument("--episodes", type=_positive_int, default=16, help="training episodes")
+    tu.add_argument("--generations", type=_positive_int, default=8)
+    tu.add_argument("--popsize", type=_positive_int, default=8)
+    tu.add_argument("--seed", type=int, default=1, help="CMA-ES seed")
+    tu.set_defaults(func=_cmd_tune)
 
     be = sub.add_parser("bench", help="throughput of a native vector env vs filterpy")
     be.add_argument("env", help="foot, waist or marker")

@@ -1,6 +1,7 @@
 """Evaluate tuning policies on the same held-out episodes.
 
-Every policy plays episodes with seeds S, S+1, …, S+N−1 (one lane of the
+Every policy plays episodes with seeds S, S+1, …, S+N−1 (evaluation seeds,
+below 1 000 000: disjoint from every training seed, see baselines.seeds; one lane of the
 native vector env per episode, lane i reset with seed S+i), through SB3's
 ``evaluate_policy`` on the :class:`agents.sb3_vec.NativeVecEnv` adapter.
 An episode's score is its time-averaged horizontal error in metres (marker
@@ -28,11 +29,13 @@ from scipy import stats
 from stable_baselines3.common.evaluation import evaluate_policy
 
 import pednav_env  # noqa: F401  (registers the environments)
+from agents.policies import load_run, pretrained_dir
 from agents.sb3_vec import NativeVecEnv
-from baselines import PaperPolicy
+from baselines import InnovationAdaptivePolicy, PaperPolicy, TunedFixedPolicy
+from baselines.seeds import check_evaluation_seeds
 
 #: Policy names understood besides a path to a saved SB3 model (.zip).
-BUILTIN_POLICIES = ("paper",)
+BUILTIN_POLICIES = ("paper", "tuned", "adaptive", "pretrained")
 #: Lanes per batch when evaluating many episodes.
 MAX_LANES = 128
 
@@ -52,25 +55,30 @@ class EpisodeResult:
         return 100.0 * self.final_error / self.distance if self.distance > 0 else math.nan
 
 
-def load_policy(name: str, action_space: gym.spaces.Box) -> Any:
-    """A policy by name (``paper``) or from a saved SB3 model file."""
+def load_policy(name: str, action_space: gym.spaces.Box, env_id: str = "") -> Any:
+    """A policy by name or from a run directory / saved SB3 model (.zip).
+
+    Names: ``paper`` (action 0), ``tuned`` (the shipped best constant action),
+    ``adaptive`` (the innovation-based rule), ``pretrained`` (the shipped
+    tuner under ``agents/pretrained/``).
+    """
     if name == "paper":
         return PaperPolicy(action_space)
+    if name == "tuned":
+        return TunedFixedPolicy.for_env(env_id, action_space)
+    if name == "adaptive":
+        return InnovationAdaptivePolicy(action_space, env_id)
+    if name == "pretrained":
+        path = pretrained_dir(env_id)
+        if not (path / "model.zip").exists():
+            raise ValueError(f"no pretrained tuner shipped for {env_id!r} (looked in {path})")
+        return load_run(path)
     path = Path(name)
     if path.suffix == ".zip" or path.exists():
-        if not path.exists():
-            raise ValueError(f"policy {name!r}: no such model file")
-        from stable_baselines3 import PPO, SAC
-
-        for algo in (PPO, SAC):
-            try:
-                return algo.load(path, device="cpu")
-            except (ValueError, KeyError, RuntimeError):
-                continue
-        raise ValueError(f"policy {name!r}: not a PPO or SAC model")
+        return load_run(path)
     raise ValueError(
         f"unknown policy {name!r}: use one of {', '.join(BUILTIN_POLICIES)} or a path to a "
-        "saved SB3 model (.zip)"
+        "run directory or saved SB3 model (.zip)"
     )
 
 
@@ -154,10 +162,11 @@ def evaluate(
     """Evaluate every named policy on the same episodes; returns the JSON object."""
     if not policy_names:
         raise ValueError("no policy named")
+    check_evaluation_seeds(seed, episodes)
     probe = gym.make(env_id, **(env_kwargs or {}))
     action_space = probe.action_space
     probe.close()
-    policies = {name: load_policy(name, action_space) for name in policy_names}
+    policies = {name: load_policy(name, action_space, env_id) for name in policy_names}
     if "paper" not in policies:
         policies = {"paper": PaperPolicy(action_space), **policies}
     outcomes = {

@@ -1,0 +1,34 @@
+"""The seed split: training and evaluation episodes are disjoint by construction.
+
+Every episode is drawn from a generator seeded with one integer (lane i of a
+vector env reset with seed s uses s + i; its later episodes continue that
+generator). Evaluation uses the first episode of generators seeded in
+``[0, TRAIN_SEED_BASE)``; training and the tuned-fixed search use only
+generators seeded at ``TRAIN_SEED_BASE`` and above, so no training episode is
+ever an evaluation episode.
+"""
+
+from __future__ import annotations
+
+#: Evaluation seeds are below this, training seeds at or above it.
+TRAIN_SEED_BASE = 1_000_000
+#: Seeds of training run ``seed``: TRAIN_SEED_BASE + seed · LANES_PER_RUN + lane.
+LANES_PER_RUN = 10_000
+#: The tuned-fixed search evaluates candidates on these seeds (training side).
+SEARCH_SEED = 900_000_000  # tuned-fixed search episodes (training side)
+
+
+def check_evaluation_seeds(seed: int, episodes: int) -> None:
+    """Raise unless seeds ``seed … seed+episodes−1`` are all evaluation seeds."""
+    if seed < 0 or seed + episodes > TRAIN_SEED_BASE:
+        raise ValueError(
+            f"evaluation seeds must lie in [0, {TRAIN_SEED_BASE}); got seed={seed}, "
+            f"episodes={episodes} (seeds ≥ {TRAIN_SEED_BASE} are reserved for training)"
+        )
+
+
+def training_seed(run_seed: int) -> int:
+    """First lane seed of training run ``run_seed`` (≥ TRAIN_SEED_BASE)."""
+    if not 0 <= run_seed < 10_000:
+        raise ValueError(f"seed must be in [0, 10000) for training, got {run_seed}")
+    return TRAIN_SEED_BASE + run_seed * LANES_PER_RUN

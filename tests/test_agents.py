@@ -1,0 +1,143 @@
+"""Training, saved tuners, the seed split, and the tuned/adaptive baselines."""
+
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from agents.evaluate import evaluate, load_policy
+from agents.policies import load_run
+from agents.train import load_hyperparams, train
+from baselines import InnovationAdaptivePolicy, TunedFixedPolicy
+from baselines import tuned as tuned_module
+from baselines.seeds import TRAIN_SEED_BASE, check_evaluation_seeds, training_seed
+from pednav_env.envs.foot_core import OBS_FEATURES, FootZuptConfig
+from pednav_env.gait.foot_route import RouteRandomization
+
+ENV_ID = "pednav/FootZupt-v0"
+SHORT = FootZuptConfig(route=RouteRandomization(duration_s=(10.0, 14.0)))
+TINY = {
+    "n_steps": 64,
+    "batch_size": 64,
+    "n_epochs": 1,
+    "env_kwargs": {"config": SHORT},
+    "policy_kwargs": {"net_arch": [16]},
+    "checkpoint_steps": 256,
+}
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run")
+    return train(
+        ENV_ID,
+        "ppo",
+        timesteps=512,
+        seed=3,
+        n_envs=4,
+        run_dir=out,
+        progress_bar=False,
+        hyperparams=TINY,
+    )
+
+
+def test_training_saves_a_loadable_model_with_stats_and_meta(run_dir):
+    assert (run_dir / "model.zip").exists() and (run_dir / "vecnormalize.pkl").exists()
+    assert list((run_dir / "checkpoints").glob("model_*_steps.zip"))
+    assert list((run_dir / "tb").iterdir())  # TensorBoard logs
+    meta = json.loads((run_dir / "meta.json").read_text())
+    assert meta["env_id"] == ENV_ID and meta["algo"] == "ppo" and meta["timesteps"] >= 512
+    assert meta["training_seeds_from"] == training_seed(3) >= TRAIN_SEED_BASE
+
+
+def test_loaded_policy_acts_like_the_trained_one(run_dir):
+    import pickle
+
+    from stable_baselines3 import PPO
+
+    policy = load_run(run_dir)
+    obs = np.stack([gym.make(ENV_ID, config=SHORT).reset(seed=s)[0] for s in range(5)])
+    model = PPO.load(run_dir / "model.zip", device="cpu")
+    with (run_dir / "vecnormalize.pkl").open("rb") as fh:
+        stats = pickle.load(fh)
+    expected, _ = model.predict(stats.normalize_obs(obs), deterministic=True)
+    got, _ = policy.predict(obs)
+    np.testing.assert_allclose(got, expected, atol=1e-6)
+    assert not np.allclose(policy.normalize(obs), obs)  # statistics really applied
+
+
+def test_resume_continues_from_the_checkpoint(run_dir):
+    out = train(
+        ENV_ID,
+        "ppo",
+        timesteps=768,
+        seed=3,
+        n_envs=4,
+        run_dir=run_dir,
+        resume=True,
+        progress_bar=False,
+        hyperparams=TINY,
+    )
+    assert json.loads((out / "meta.json").read_text())["timesteps"] >= 768
+
+
+def test_seed_split_is_enforced():
+    check_evaluation_seeds(5000, 100)
+    with pytest.raises(ValueError, match="reserved for training"):
+        check_evaluation_seeds(TRAIN_SEED_BASE - 5, 10)
+    with pytest.raises(ValueError, match="reserved for training"):
+        evaluate(ENV_ID, ["paper"], 3, TRAIN_SEED_BASE, {"config": SHORT})
+    assert training_seed(0) >= TRAIN_SEED_BASE
+    assert tuned_module.SEARCH_SEED >= TRAIN_SEED_BASE
+    with pytest.raises(ValueError, match="seed"):
+        training_seed(-1)
+
+
+def test_hyperparameter_files_and_bad_names():
+    hp = load_hyperparams("ppo", ENV_ID)
+    assert hp["n_envs"] >= 1 and "policy" in hp
+    assert load_hyperparams("sac", ENV_ID)["n_timesteps"] > 0
+    with pytest.raises(ValueError, match="algo"):
+        load_hyperparams("dqn", ENV_ID)
+    with pytest.raises(ValueError, match="no hyperparameters"):
+        load_hyperparams("ppo", "pednav/Nope-v0")
+
+
+def test_tuned_search_and_policy(tmp_path, monkeypatch):
+    monkeypatch.setattr(tuned_module, "RESULTS_FILE", tmp_path / "tuned.json")
+    res = tuned_module.search(
+        ENV_ID, 4, episodes=2, generations=1, popsize=2, save=True, env_kwargs={"config": SHORT}
+    )
+    assert len(res["action"]) == 4 and all(-1 <= a <= 1 for a in res["action"])
+    assert res["objective_m"] > 0 and res["evaluations"] == 2
+    space = gym.make(ENV_ID).action_space
+    pol = TunedFixedPolicy.for_env(ENV_ID, space)
+    a, _ = pol.predict(np.zeros((3, 20), np.float32))
+    np.testing.assert_allclose(a, np.tile(res["action"], (3, 1)), atol=1e-6)
+    with pytest.raises(ValueError, match="no tuned-fixed action"):
+        TunedFixedPolicy.for_env("pednav/Other-v0", space)
+
+
+def test_adaptive_rule_reacts_to_innovations_and_motion():
+    space = gym.make(ENV_ID).action_space
+    pol = InnovationAdaptivePolicy(space)
+    idx = {n: i for i, (n, _, _) in enumerate(OBS_FEATURES)}
+    obs = np.zeros((3, 20), np.float32)
+    obs[:, idx["log_nis_interval"]] = np.log1p([40.0, 4.0, 0.4])  # NIS 10x, 1x, 0.1x expected
+    obs[:, idx["gyro_norm_mean"]] = [0.05, 2.0, 6.0]  # still, walking, running
+    obs[:, idx["accel_excess_std"]] = [0.01, 5.0, 20.0]
+    a, _ = pol.predict(obs)
+    assert a[0, 2] > 0 and a[1, 2] == pytest.approx(0.0, abs=1e-6) and a[2, 2] < 0
+    assert a[0, 0] == 0.0 and a[0, 1] == 0.0  # still: paper thresholds
+    assert a[2, 0] > a[1, 0] and a[2, 1] > a[1, 1]  # faster gait: wider thresholds
+    with pytest.raises(ValueError, match="no innovation-adaptive rule"):
+        InnovationAdaptivePolicy(space, "pednav/MarkerTrack-v0")
+
+
+def test_load_policy_names(run_dir):
+    space = gym.make(ENV_ID).action_space
+    assert load_policy("adaptive", space, ENV_ID).name == "adaptive"
+    assert load_policy(str(run_dir), space, ENV_ID) is not None
+    with pytest.raises(ValueError, match="no pretrained tuner"):
+        load_policy("pretrained", space, "pednav/Other-v0")
