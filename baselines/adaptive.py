@@ -10,12 +10,16 @@ For ``pednav/FootZupt-v0``:
   R stays at the paper value (the ZUPT pseudo-measurement noise is a
   modelling choice, not a sensor property).
 - **Detection from gait statistics:** thresholds follow the motion of the
-  last interval: ω_max = 0.12 · mean|ω'| and Δf_max = 0.08 · std(|f'| − g),
+  last interval: ω_max = 0.03 · mean|ω'| and Δf_max = 0.03 · std(|f'| − g),
   within [0.05, 2.0] rad/s and [0.1, 3.0] m/s²; the paper's thresholds while
-  nearly still (mean|ω'| < 0.3 rad/s). The two factors put the thresholds
-  above the stance motion and below the swing motion of the simulator's
-  training walks (stance |ω| ≈ 0.1–0.3 rad/s walking, ~1 rad/s running;
-  interval means ≈ 2, 3, 5+ rad/s) — fixed a priori, not fitted.
+  nearly still (mean|ω'| < 0.3 rad/s).
+
+The two factors were chosen among (0.12, 0.08), (0.05, 0.04), (0.03, 0.03),
+(0.02, 0.02) and (0.03, 0.06) by the mean time-averaged error on 24
+*training* episodes (seeds 2 000 000 – 2 000 023; paper policy 18.1 m, the
+chosen pair 14.5 m, the others 16.4–21.5 m); the NIS step η = 0.25 was fixed
+a priori (η = 0 gave 18.3 m with the (0.05, 0.04) pair against 18.1 m with
+η = 0.25). No evaluation seed was used.
 """
 
 from __future__ import annotations
@@ -34,8 +38,8 @@ class InnovationAdaptivePolicy:
 
     name = "adaptive"
     eta = 0.25
-    omega_factor = 0.12
-    accel_factor = 0.08
+    omega_factor = 0.03
+    accel_factor = 0.03
 
     def __init__(self, action_space: spaces.Box, env_id: str = "pednav/FootZupt-v0") -> None:
         if env_id != "pednav/FootZupt-v0":
