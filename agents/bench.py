@@ -23,6 +23,7 @@ import numpy as np
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 from gymnasium.utils import seeding
 
+from agents.bench_marker import bench_marker
 from pednav_env.envs.foot_core import FootZuptConfig, generate_episode
 from pednav_env.envs.foot_zupt import FootZuptVectorEnv
 from pednav_env.nav.alignment import align_static
@@ -159,7 +160,10 @@ def bench_foot(
     return {"bench": "foot", "rows": rows, "peak_rss_mb": peak_mb}
 
 
-BENCHES: dict[str, Callable[..., dict[str, Any]]] = {"foot": bench_foot}
+BENCHES: dict[str, Callable[..., dict[str, Any]]] = {
+    "foot": bench_foot,
+    "marker": bench_marker,
+}
 
 
 def run(name: str, **kwargs: Any) -> dict[str, Any]:

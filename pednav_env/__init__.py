@@ -25,3 +25,10 @@ if "pednav/FootZupt-v0" not in registry:
         entry_point="pednav_env.envs.foot_zupt:FootZuptEnv",
         vector_entry_point="pednav_env.envs.foot_zupt:FootZuptVectorEnv",
     )
+
+if "pednav/MarkerTrack-v0" not in registry:
+    register(
+        id="pednav/MarkerTrack-v0",
+        entry_point="pednav_env.envs.marker_track:MarkerTrackEnv",
+        vector_entry_point="pednav_env.envs.marker_track:MarkerTrackVectorEnv",
+    )

@@ -1,0 +1,344 @@
+"""``pednav/MarkerTrack-v0``: Gymnasium/SB3 API checks, determinism, scalar-vector
+equivalence, the filterpy oracle, rewards, bad input, a fuzz run, render,
+pickling, re-anchoring, divergence and a PPO smoke run."""
+
+import doctest
+import itertools
+import math
+import pickle
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils import seeding
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+import pednav_env  # noqa: F401  (registers the environments)
+from agents.bench_marker import FilterpyMarkerEngine
+from pednav_env.envs import marker_track
+from pednav_env.envs.marker_core import (
+    MarkerEkfEngine,
+    MarkerTrackConfig,
+    MarkerTrackCore,
+    measure_uwb_walker,
+    uwb_spec,
+)
+from pednav_env.nav.marker_ekf import MarkerEkfConfig, run_marker_ekf
+from pednav_env.sensors.uwb import UwbSpec, measure_uwb
+
+ENV_ID = "pednav/MarkerTrack-v0"
+#: Short walks with gait changes and frequent re-anchoring, for fast tests.
+SHORT = MarkerTrackConfig(
+    duration_s=(4.0, 8.0), gait_change_rate_hz=0.5, reanchor_after_s=2.0, reanchor_keep_s=1.0
+)
+
+
+def rollout(env, seed, actions=None, max_steps=10_000):
+    obs, _ = env.reset(seed=seed)
+    out = [obs]
+    rewards = []
+    for t in range(max_steps):
+        a = np.zeros(env.action_space.shape, np.float32) if actions is None else actions(t)
+        obs, r, term, trunc, info = env.step(a)
+        out.append(obs)
+        rewards.append(r)
+        if term or trunc:
+            break
+    return np.array(out), np.array(rewards), info
+
+
+def test_gymnasium_and_sb3_checkers_pass_without_warnings():
+    env = gym.make(ENV_ID, config=SHORT)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gym_check_env(env.unwrapped)
+        sb3_check_env(env, warn=True)
+
+
+def test_docstring_example_runs():
+    result = doctest.testmod(marker_track, optionflags=doctest.ELLIPSIS)
+    assert result.attempted > 0 and result.failed == 0
+
+
+def test_same_seed_same_episode():
+    env = gym.make(ENV_ID, config=SHORT)
+    a = rollout(env, 3)
+    b = rollout(env, 3)
+    c = rollout(env, 4)
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1], b[1])
+    assert a[0].shape != c[0].shape or not np.array_equal(a[0], c[0])
+
+
+def test_vector_lanes_equal_scalar_envs_bit_for_bit():
+    n, seed = 3, 20
+    venv = gym.make_vec(ENV_ID, num_envs=n, vectorization_mode="vector_entry_point", config=SHORT)
+    assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    obs, _ = venv.reset(seed=seed)
+    lane_obs = [[obs[i]] for i in range(n)]
+    lane_rew = [[] for _ in range(n)]
+    lane_err = [[] for _ in range(n)]
+    episodes_done = np.zeros(n, dtype=int)
+    rng = np.random.default_rng(0)
+    actions = []
+    while episodes_done.min() < 2:  # two episodes per lane: covers autoreset
+        a = rng.uniform(-0.6, 0.6, (n, 4)).astype(np.float32)
+        actions.append(a)
+        obs, r, term, trunc, info = venv.step(a)
+        for i in range(n):
+            lane_rew[i].append(r[i])
+            lane_err[i].append(info["error"][i])
+            if term[i] or trunc[i]:
+                lane_obs[i].append(info["final_obs"][i])
+                episodes_done[i] += 1
+            lane_obs[i].append(obs[i])
+    for i in range(n):
+        env = gym.make(ENV_ID, config=SHORT).unwrapped
+        obs_s, _ = env.reset(seed=seed + i)
+        got_obs, got_rew, got_err = [obs_s], [], []
+        for a in actions:
+            o, r, term, trunc, info = env.step(a[i])
+            got_obs.append(o)
+            got_rew.append(r)
+            got_err.append(info["error"])
+            if term or trunc:
+                o, _ = env.reset()  # next episode from the same generator
+                got_obs.append(o)
+        np.testing.assert_array_equal(np.array(got_obs), np.array(lane_obs[i]))
+        np.testing.assert_array_equal(np.array(got_rew), np.array(lane_rew[i]))
+        np.testing.assert_array_equal(np.array(got_err), np.array(lane_err[i]))
+
+
+@pytest.mark.parametrize("action", [np.zeros(4), np.array([0.4, -0.3, 0.5, 0.2])])
+def test_return_is_minus_the_time_averaged_rms_error(action):
+    """Independent bookkeeping: run the library's MarkerEKF over the episode's UWB
+    record (paper scenario: no re-anchoring) with the action's constant Q and R
+    scales, and average its RMS marker error over the decision intervals."""
+    env = gym.make(ENV_ID, scenario="paper").unwrapped
+    _, rewards, info = rollout(env, 0, lambda t: action)
+    core = env.core
+    K, k = int(core.length[0]), core.k
+    assert K == 100 and len(rewards) == 20  # 10 s at 10 Hz, 0.5 s steps
+    z = core.zbuf[0, :K].reshape(1, K, 2, 2)
+    valid = core.vbuf[0, :K][:, (0, 2)][None]
+    scale = [1000.0 ** action[0], 1000.0 ** action[1], 1000.0 ** action[2], 100.0 ** action[3]]
+    q_scale = np.array([[scale[g] for g in (0, 0, 1, 1, 0, 2)]])
+    run = run_marker_ekf(core.config.filter, z, valid, q_scale, scale[3])
+    sq = ((run.markers.reshape(K, 4) - core.tbuf[0, :K]) ** 2).mean(axis=1)
+    ends = list(range(0, K, k)) + [K]
+    rms = np.array([math.sqrt(sq[a:b].mean()) for a, b in itertools.pairwise(ends)])
+    weights = np.diff(ends) / K
+    assert rewards.sum() == pytest.approx(-(weights * rms).sum(), rel=1e-9)
+    assert info["error"] == pytest.approx(rms[-1], rel=1e-9)
+    assert info["distance"] > 25.0  # 3 m/s heel trend for 9.9 s
+
+
+def test_engine_matches_filterpy_inside_the_env():
+    """The same episode, features and re-anchoring with filterpy's
+    ExtendedKalmanFilter as the filter (the benchmark's reference)."""
+    cfg = MarkerTrackConfig(
+        duration_s=(12.0, 12.0),
+        uwb_conditions=("realistic",),
+        uwb_condition_weights=(1.0,),
+        reanchor_after_s=3.0,
+        reanchor_keep_s=1.0,
+    )
+    native = MarkerTrackCore(cfg, 1, ENV_ID)
+    oracle = MarkerTrackCore(cfg, 1, ENV_ID, engine_factory=FilterpyMarkerEngine)
+    native.reset_lanes(np.array([0]), [seeding.np_random(7)[0]])
+    oracle.reset_lanes(np.array([0]), [seeding.np_random(7)[0]])
+    assert not native.vbuf[0, : native.length[0]].all()  # dropped samples occur
+    action = np.array([[0.2, 0.3, 0.3, -0.2]])
+    for _ in range(24):
+        o1, r1, t1, u1, i1 = native.step(action)
+        o2, r2, _, u2, _ = oracle.step(action)
+        x2, P2 = oracle.engine.x, oracle.engine.P
+        assert np.max(np.abs(native.engine.x - x2)) <= 1e-8 * np.max(np.abs(x2))
+        assert np.max(np.abs(native.engine.P - P2)) <= 1e-8 * np.max(np.abs(P2))
+        assert r1[0] == pytest.approx(r2[0], rel=1e-9)
+        np.testing.assert_allclose(o1, o2, rtol=1e-5, atol=1e-5)
+        if t1[0] or u1[0]:
+            break
+    assert u1[0] and u2[0] and i1["reanchors"][0] >= 2
+
+
+@pytest.mark.parametrize("condition", ["clean", "nlos", "outliers", "dropouts", "realistic"])
+def test_fast_uwb_walker_equals_measure_uwb_bit_for_bit(condition):
+    spec = uwb_spec(condition, 10.0, 1.2)
+    if condition == "nlos":  # long, frequent bursts: many entries and exits
+        spec = UwbSpec(
+            rate_hz=10.0,
+            nlos_start_rate_hz=1.0,
+            nlos_mean_duration=0.5,
+            nlos_drop_prob=0.5,
+            drop_prob=0.1,
+            outlier_prob=0.1,
+        )
+    t = np.arange(600) * 0.1
+    markers = np.stack((np.stack((3 * t, 0.1 + 0.1 * np.sin(9 * t)), -1),) * 2, axis=1)
+    z, valid = measure_uwb_walker(spec, markers, np.random.default_rng(5))
+    ref = measure_uwb(spec, markers[None], [np.random.default_rng(5)])
+    np.testing.assert_array_equal(valid, ref.valid[0])
+    np.testing.assert_array_equal(z, ref.z[0])
+
+
+def test_reanchoring_is_an_exact_reparametrisation():
+    e = MarkerEkfEngine(MarkerEkfConfig(), 4)
+    rng = np.random.default_rng(1)
+    e.x[:] = 0.05 * np.abs(e.p0) * rng.standard_normal((6, 4))
+    t = np.array([9.0, 12.3, 20.0, 30.0])
+    core = MarkerTrackCore(MarkerTrackConfig(), 4, ENV_ID)
+    core.engine = e
+    before = e.markers(t + 0.37)
+    core._reanchor(np.round(t / 0.1).astype(np.int64), np.ones(4, dtype=bool))
+    assert np.all(e.t_anchor > 0) and np.all(t - e.t_anchor >= core.config.reanchor_keep_s)
+    omega = e.p0[5, 0] + e.x[5]
+    cycles = omega * e.t_anchor / (2 * np.pi)
+    np.testing.assert_allclose(cycles, np.round(cycles), atol=1e-9)  # a cycle boundary
+    np.testing.assert_allclose(e.markers(t + 0.37), before, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "bad", [np.zeros(3), np.zeros((1, 4)), np.array([0, np.nan, 0, 0]), np.array([np.inf, 0, 0, 0])]
+)
+def test_bad_actions_raise_with_the_env_name(bad):
+    env = gym.make(ENV_ID, config=SHORT).unwrapped
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=ENV_ID):
+        env.step(bad)
+
+
+def test_vector_bad_actions_raise_with_the_env_name():
+    venv = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="vector_entry_point", config=SHORT)
+    venv.reset(seed=0)
+    with pytest.raises(ValueError, match=ENV_ID):
+        venv.step(np.zeros((3, 4)))
+    with pytest.raises(ValueError, match=ENV_ID):
+        venv.step(np.full((2, 4), np.nan))
+
+
+def test_out_of_range_actions_are_clipped_and_counted():
+    env = gym.make(ENV_ID, config=SHORT).unwrapped
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.array([3.0, -2.0, 0.0, 1.0]))
+    assert info["clipped_actions"] == 1
+    assert info["knobs"]["q_amplitude_scale"] == pytest.approx(1000.0)
+    assert info["knobs"]["q_trend_scale"] == pytest.approx(1e-3)
+    assert info["knobs"]["r_scale"] == pytest.approx(100.0)
+    np.testing.assert_allclose(env.core.engine.r[:, 0], 100.0 * 0.01)
+    _, _, _, _, info = env.step(np.zeros(4))
+    assert info["clipped_actions"] == 1
+
+
+def test_fuzz_random_and_extreme_actions_over_whole_episodes():
+    env = gym.make(ENV_ID, config=SHORT).unwrapped
+    rng = np.random.default_rng(99)
+    corners = np.array(np.meshgrid(*[[-1.0, 1.0]] * 4)).reshape(4, -1).T
+    policies = [
+        lambda t: rng.uniform(-1, 1, 4),
+        lambda t: rng.choice([-1e6, -1.0, 1.0, 1e6], 4),
+        lambda t: corners[t % len(corners)],
+    ]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        for seed in range(6):
+            for policy in policies:
+                obs, rewards, info = rollout(env, seed, policy)
+                assert np.all(np.isfinite(obs)) and np.all(np.isfinite(rewards))
+                assert all(env.observation_space.contains(o) for o in obs)
+                assert np.all(rewards <= 0)
+                assert np.isfinite(info["error"])
+
+
+def test_divergence_terminates_and_holds_the_final_error():
+    cfg = MarkerTrackConfig(scenario="paper", divergence_error_m=0.01)
+    env = gym.make(ENV_ID, config=cfg).unwrapped
+    env.reset(seed=0)
+    _, reward, terminated, truncated, info = env.step(np.zeros(4))
+    assert terminated and not truncated and info["lock_lost"] and not info["diverged"]
+    # 5 of 100 samples scored, the error held for the other 95: −error in total
+    assert reward == pytest.approx(-info["error"], rel=1e-12)
+    assert info["reward_error"] == pytest.approx(-info["error"] * 0.05, rel=1e-12)
+
+
+def test_paper_scenario_and_action_zero_is_the_paper_filter():
+    env = gym.make(ENV_ID, scenario="paper").unwrapped
+    obs, info = env.reset(seed=1)
+    assert info["uwb_condition"] == "paper"
+    assert info["knobs"] == {
+        "q_amplitude_scale": 1.0,
+        "q_trend_scale": 1.0,
+        "q_cadence_scale": 1.0,
+        "r_scale": 1.0,
+    }
+    paper = MarkerEkfConfig()
+    np.testing.assert_array_equal(env.core.engine.q[:, 0], paper.process.process_noise)
+    np.testing.assert_array_equal(env.core.engine.r[:, 0], paper.meas_std**2)
+    assert env.config.reanchor_after_s == math.inf
+    assert obs.shape == (29,)
+    _, _, info = rollout(env, 1)
+    assert info["reanchors"] == 0
+
+
+def test_render_rgb_array_and_pickling():
+    env = gym.make(ENV_ID, config=SHORT, render_mode="rgb_array")
+    env.reset(seed=0)
+    for _ in range(3):
+        env.step(np.zeros(4, np.float32))
+    frame = env.render()
+    assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
+    assert frame.std() > 0
+    env.close()
+    env = gym.make(ENV_ID, config=SHORT).unwrapped
+    env.reset(seed=5)
+    env.step(np.zeros(4))
+    clone = pickle.loads(pickle.dumps(env))
+    a = env.step(np.full(4, 0.3))
+    b = clone.step(np.full(4, 0.3))
+    np.testing.assert_array_equal(a[0], b[0])
+    assert a[1] == b[1]
+
+
+def test_bad_configuration_raises():
+    with pytest.raises(ValueError, match="scenario"):
+        gym.make(ENV_ID, scenario="moon")
+    with pytest.raises(ValueError, match="decision_interval_s"):
+        gym.make(ENV_ID, decision_interval_s=0.0)
+    with pytest.raises(ValueError, match="rate_hz"):
+        gym.make(ENV_ID, rate_hz=-10.0)
+    with pytest.raises(ValueError, match="uwb_conditions"):
+        MarkerTrackConfig(uwb_conditions=("fog",), uwb_condition_weights=(1.0,))
+    with pytest.raises(ValueError, match="uwb_condition_weights"):
+        MarkerTrackConfig(uwb_condition_weights=(1.0, -1.0, 1.0, 1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="duration_s"):
+        MarkerTrackConfig(duration_s=(10.0, 5.0))
+    with pytest.raises(ValueError, match="reanchor_after_s"):
+        MarkerTrackConfig(reanchor_after_s=1.0, reanchor_keep_s=2.0)
+    with pytest.raises(ValueError, match=r"filter\.sample_period"):
+        MarkerTrackConfig(rate_hz=20.0, filter=MarkerEkfConfig())
+    with pytest.raises(ValueError, match="divergence_error_m"):
+        MarkerTrackConfig(divergence_error_m=0.0)
+    with pytest.raises(ValueError, match="num_envs"):
+        gym.make_vec(ENV_ID, num_envs=0, vectorization_mode="vector_entry_point")
+
+
+def test_ppo_trains_for_2000_steps():
+    from stable_baselines3 import PPO
+
+    env = gym.make(ENV_ID, config=SHORT)
+    model = PPO(
+        "MlpPolicy",
+        env,
+        n_steps=256,
+        batch_size=64,
+        n_epochs=2,
+        seed=0,
+        policy_kwargs={"net_arch": [32, 32]},
+        device="cpu",
+    )
+    model.learn(2000)
+    assert model.num_timesteps >= 2000
+    action, _ = model.predict(env.reset(seed=1)[0], deterministic=True)
+    assert action.shape == (4,)
