@@ -24,6 +24,7 @@ from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 from gymnasium.utils import seeding
 
 from agents.bench_marker import bench_marker
+from agents.bench_waist import bench_waist
 from pednav_env.envs.foot_core import FootZuptConfig, generate_episode
 from pednav_env.envs.foot_zupt import FootZuptVectorEnv
 from pednav_env.nav.alignment import align_static
@@ -163,6 +164,7 @@ def bench_foot(
 BENCHES: dict[str, Callable[..., dict[str, Any]]] = {
     "foot": bench_foot,
     "marker": bench_marker,
+    "waist": bench_waist,
 }
 
 

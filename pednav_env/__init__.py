@@ -32,3 +32,10 @@ if "pednav/MarkerTrack-v0" not in registry:
         entry_point="pednav_env.envs.marker_track:MarkerTrackEnv",
         vector_entry_point="pednav_env.envs.marker_track:MarkerTrackVectorEnv",
     )
+
+if "pednav/WaistStep-v0" not in registry:
+    register(
+        id="pednav/WaistStep-v0",
+        entry_point="pednav_env.envs.waist_step:WaistStepEnv",
+        vector_entry_point="pednav_env.envs.waist_step:WaistStepVectorEnv",
+    )

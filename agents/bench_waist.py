@@ -1,0 +1,200 @@
+"""Throughput of ``pednav/WaistStep-v0``: the native vector env against filterpy.
+
+``pednav bench waist [--json]`` measures, for N = 1, 16, 64, 256, the env
+steps per second of the native vector env (all N walks through one batched
+detector and step-fusion filter, paper policy, autoresets included) and, in
+the same process, of a reference that steps N scalar environments one after
+another. Each reference environment plays the same episodes and does the same
+work the ordinary way: it streams its sensor samples one at a time through
+the engine's step detector (:func:`pednav_env.nav.waist_dr.detect_steps` with
+N = 1 and its carried state, as ``bench_foot`` streams the stance detector),
+and at each detected step computes V̄^INS, the pendulum step velocity with the
+library's :func:`~pednav_env.nav.waist_dr.biomechanical_step_velocity` on the
+step's samples, and runs two ``filterpy.kalman.KalmanFilter`` objects (east
+and north channel of paper 004) through ``predict(F=Φ(T), Q=Q)`` and
+``update(S)``, with the position of eqs (5)–(6); at the end of each interval
+it forms the position estimate and its error, like the env.
+
+JSON: ``{"bench": "waist", "rows": [{"num_envs": 256, "steps_per_s": ..,
+"reference_steps_per_s": .., "ratio": ..}, ...]}`` (plus ``peak_rss_mb``).
+"""
+
+from __future__ import annotations
+
+import resource
+from typing import Any
+
+import numpy as np
+from filterpy.kalman import KalmanFilter
+from gymnasium.utils import seeding
+
+from pednav_env.envs.waist_core import WaistStepConfig, generate_episode
+from pednav_env.envs.waist_step import WaistStepVectorEnv
+from pednav_env.nav.step_fusion_kf import H_DV
+from pednav_env.nav.waist_dr import (
+    StepDetectorConfig,
+    StepDetectorState,
+    biomechanical_step_velocity,
+    detect_steps,
+)
+from pednav_env.sensors.ins_error import CHANNEL_SIGN, schuler_transition
+
+DEFAULT_SIZES = (1, 16, 64, 256)
+
+
+class FilterpyWaistReference:
+    """One scalar waist environment whose filter is plain filterpy (paper policy).
+
+    Plays the same episodes as lane ``seed`` of the native env (a new episode
+    from the same generator at the end of each walk, like an autoreset).
+    ``knobs`` are the physical detector/filter values: threshold, hysteresis,
+    minimum step duration, σ_n scale, Q scale (default: paper 004's).
+    """
+
+    def __init__(
+        self,
+        config: WaistStepConfig,
+        seed: int,
+        knobs: tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 1.0, 1.0),
+    ) -> None:
+        self.config = config
+        self.rng = seeding.np_random(seed)[0]
+        self.dt = 1.0 / config.rate_hz
+        self.k = config.interval_samples
+        self.knobs = knobs
+        self.det_cfg = StepDetectorConfig(g=config.g)
+        self.finished: dict[str, Any] | None = None
+        self._new_episode()
+
+    def _new_episode(self) -> None:
+        fc = self.config.filter
+        self.ep = generate_episode(self.config, self.rng)
+        self.filters = []
+        for _ in range(2):  # east, north
+            kf = KalmanFilter(dim_x=3, dim_z=1)
+            kf.x = np.array(fc.initial_estimate, dtype=float)[:, None]
+            kf.P = fc.P0.copy()
+            kf.H = H_DV.copy()
+            kf.Q = fc.Q * self.knobs[4]
+            kf.R = fc.R * self.knobs[3] ** 2
+            self.filters.append(kf)
+        self.state = StepDetectorState.initial(1)
+        self.pos = np.zeros(2)  # Ê at the last boundary
+        self.last_b = 0
+        self.cursor = 0
+        self.interval = 0
+        self.estimates: list[np.ndarray] = []
+        self.errors: list[float] = []
+        self.weights: list[float] = []
+
+    def _close_step(self, j1: int) -> None:
+        ep, dt, fc = self.ep, self.dt, self.config.filter
+        j0 = self.last_b
+        T = (j1 - j0) * dt
+        v_ins = (ep.ins_pos[j1] - ep.ins_pos[j0]) / T
+        bm = biomechanical_step_velocity(
+            ep.a_up[j0 : j1 + 1][None], dt, [[0, j1 - j0]], ep.leg_length_assumed, rule="delta_v"
+        )
+        v_bm = bm.velocity[0, 0] + ep.bm_noise[(j0 + j1) // 2]
+        psi = ep.yaw[j1]
+        vb = v_bm * np.array([np.cos(psi), np.sin(psi)])
+        for c, kf in enumerate(self.filters):
+            F = schuler_transition(T, fc.g, fc.earth_radius, CHANNEL_SIGN[c])
+            kf.predict(F=F)
+            v_corr = v_ins[c] - kf.x[0, 0]  # eq (5), extrapolated estimate
+            kf.update(np.array([[v_ins[c] - vb[c]]]))  # eqs (3)-(4)
+            self.pos[c] += T * v_corr  # eq (6)
+        self.last_b = j1
+
+    def estimate(self) -> np.ndarray:
+        """Position estimate at the last processed sample (eqs 5–6 over the open step)."""
+        fc = self.config.filter
+        tau = (self.cursor - self.last_b) * self.dt
+        disp = self.ep.ins_pos[self.cursor] - self.ep.ins_pos[self.last_b]
+        corr = np.array(
+            [
+                kf.x[0, 0] - s * fc.g * tau * kf.x[1, 0]
+                for kf, s in zip(self.filters, CHANNEL_SIGN, strict=True)
+            ]
+        )
+        return self.pos + disp - tau * corr
+
+    def step(self) -> bool:
+        """One decision interval; True when the walk ended (a new one is started)."""
+        ep = self.ep
+        L = ep.f_norm.shape[0]
+        thr, hys, min_d = self.knobs[:3]
+        f = np.zeros((1, 1, 3))
+        used = 0
+        for _ in range(self.k):
+            s = self.cursor + 1
+            if s > L - 1:
+                break
+            f[0, 0, 0] = ep.f_norm[s]
+            b, self.state = detect_steps(
+                f, self.dt, self.det_cfg, self.state, [thr], [hys], [min_d]
+            )
+            if b[0, 0]:
+                self._close_step(s)
+            self.cursor = s
+            used += 1
+        self.interval += 1
+        est = self.estimate()
+        self.estimates.append(est)
+        truth = ep.pos_n[self.cursor]
+        self.errors.append(float(np.hypot(*(est - truth))))
+        self.weights.append(used / (L - 1))
+        if self.cursor >= L - 1:
+            self.finished = {
+                "estimates": np.array(self.estimates),
+                "errors": np.array(self.errors),
+                "weights": np.array(self.weights),
+                "episode": ep,
+            }
+            self._new_episode()
+            return True
+        return False
+
+
+def _timed(step, min_seconds: float, min_calls: int) -> tuple[int, float]:
+    import time
+
+    calls, start = 0, time.perf_counter()
+    while calls < min_calls or time.perf_counter() - start < min_seconds:
+        step()
+        calls += 1
+    return calls, time.perf_counter() - start
+
+
+def bench_waist(
+    sizes: tuple[int, ...] = DEFAULT_SIZES,
+    min_seconds: float = 3.0,
+    reference_seconds: float = 3.0,
+    config: WaistStepConfig | None = None,
+) -> dict[str, Any]:
+    """Steps per second of the native vector env and of the filterpy reference."""
+    config = config or WaistStepConfig()
+    rows = []
+    for n in sizes:
+        env = WaistStepVectorEnv(num_envs=n, config=config)
+        env.reset(seed=0)
+        zeros = np.zeros((n, config.action_dim), np.float32)
+        env.step(zeros)  # warm-up
+        calls, elapsed = _timed(lambda env=env, z=zeros: env.step(z), min_seconds, 3)
+        native = n * calls / elapsed
+        env.close()
+        refs = [FilterpyWaistReference(config, seed=i) for i in range(n)]
+        ref_calls, ref_elapsed = _timed(
+            lambda refs=refs: [r.step() for r in refs], reference_seconds, 1
+        )
+        reference = n * ref_calls / ref_elapsed
+        rows.append(
+            {
+                "num_envs": n,
+                "steps_per_s": native,
+                "reference_steps_per_s": reference,
+                "ratio": native / reference,
+            }
+        )
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    return {"bench": "waist", "rows": rows, "peak_rss_mb": peak_mb}
