@@ -51,7 +51,7 @@ class FilterpyMarkerEngine:
     ``filterpy.kalman.ExtendedKalmanFilter`` per lane (a Python loop over lanes).
 
     The model is eq 4.10 about the lane's time origin (t_a, X_a), as in
-    :class:`pednav_env.envs.marker_core.MarkerEkfEngine`: h(x, τ) =
+    :class:`pednav_env.nav.marker_ekf.MarkerEkfEngine`: h(x, τ) =
     ``marker_measurement(p⁰ + x, τ, M)`` + [X_a, 0, X_a, 0] with τ = t − t_a,
     H = ``marker_jacobian(p⁰ + x, τ, M)``; skipped coordinates are left out
     of z, H and R. The normalised innovations returned by :meth:`update` are

@@ -19,14 +19,14 @@ import pednav_env  # noqa: F401  (registers the environments)
 from agents.bench_marker import FilterpyMarkerEngine
 from pednav_env.envs import marker_track
 from pednav_env.envs.marker_core import (
-    MarkerEkfEngine,
     MarkerTrackConfig,
     MarkerTrackCore,
-    measure_uwb_walker,
+    generate_episode,
     uwb_spec,
 )
-from pednav_env.nav.marker_ekf import MarkerEkfConfig, run_marker_ekf
-from pednav_env.sensors.uwb import UwbSpec, measure_uwb
+from pednav_env.gait.heel_knee import simulate_heel_knee
+from pednav_env.nav.marker_ekf import MarkerEkfConfig, MarkerEkfEngine, run_marker_ekf
+from pednav_env.sensors.uwb import measure_uwb
 
 ENV_ID = "pednav/MarkerTrack-v0"
 #: Short walks with gait changes and frequent re-anchoring, for fast tests.
@@ -164,24 +164,22 @@ def test_engine_matches_filterpy_inside_the_env():
     assert u1[0] and u2[0] and i1["reanchors"][0] >= 2
 
 
-@pytest.mark.parametrize("condition", ["clean", "nlos", "outliers", "dropouts", "realistic"])
-def test_fast_uwb_walker_equals_measure_uwb_bit_for_bit(condition):
-    spec = uwb_spec(condition, 10.0, 1.2)
-    if condition == "nlos":  # long, frequent bursts: many entries and exits
-        spec = UwbSpec(
-            rate_hz=10.0,
-            nlos_start_rate_hz=1.0,
-            nlos_mean_duration=0.5,
-            nlos_drop_prob=0.5,
-            drop_prob=0.1,
-            outlier_prob=0.1,
-        )
-    t = np.arange(600) * 0.1
-    markers = np.stack((np.stack((3 * t, 0.1 + 0.1 * np.sin(9 * t)), -1),) * 2, axis=1)
-    z, valid = measure_uwb_walker(spec, markers, np.random.default_rng(5))
-    ref = measure_uwb(spec, markers[None], [np.random.default_rng(5)])
-    np.testing.assert_array_equal(valid, ref.valid[0])
-    np.testing.assert_array_equal(z, ref.z[0])
+def test_episode_uwb_record_is_measure_uwb_of_its_walk():
+    """The env's sensor is the library's ``measure_uwb`` (one implementation;
+    tests/test_uwb.py checks it against a per-sample reference bit for bit)."""
+    cfg = MarkerTrackConfig(uwb_conditions=("realistic",), uwb_condition_weights=(1.0,))
+    ep = generate_episode(cfg, np.random.default_rng(3))
+    k = ep.z.shape[0]
+    rng = np.random.default_rng(3)  # replay the draws: duration, condition, σ factor, walk
+    rng.uniform(*cfg.duration_s)
+    rng.random()
+    spec = uwb_spec("realistic", cfg.rate_hz, rng.uniform(*cfg.noise_factor_range))
+    walk = simulate_heel_knee(cfg.truth_gait, k, [rng])
+    ref = measure_uwb(spec, walk.markers, [rng])
+    assert not ep.valid.all()
+    np.testing.assert_array_equal(ep.truth, walk.markers[0].reshape(k, 4))
+    np.testing.assert_array_equal(ep.valid, ref.valid[0])
+    np.testing.assert_array_equal(ep.z, ref.z[0].reshape(k, 4))
 
 
 def test_reanchoring_is_an_exact_reparametrisation():

@@ -208,6 +208,16 @@ def test_covariance_repair_is_counted_and_restores_positive_definiteness() -> No
     np.testing.assert_array_equal(ekf.P, ekf.P.transpose(0, 2, 1))
 
 
+def test_walker_interface_is_a_view_of_the_engine_and_nonfinite_lanes_are_not_repaired() -> None:
+    ekf = MarkerEKF(MarkerEkfConfig(), 3)
+    assert np.shares_memory(ekf.x, ekf.engine.x) and np.shares_memory(ekf.P, ekf.engine.P)
+    ekf.predict()
+    ekf.P[2, 0, 0] = np.nan  # a diverged lane: reported by repair(), left alone, not counted
+    diverged = ekf.engine.repair()
+    assert list(diverged) == [False, False, True] and list(ekf.repairs) == [0, 0, 0]
+    assert np.isnan(ekf.engine.P[0, 0, 2])
+
+
 def test_filter_is_statistically_consistent_in_a_mildly_nonlinear_regime() -> None:
     # Truth drawn from the filter's own prior (stationary start), 5.5 % parameter
     # spread (var ratio 0.003), τ = 1000 s: the EKF should be consistent. With

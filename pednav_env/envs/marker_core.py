@@ -4,7 +4,9 @@ One implementation for any number of lanes: the scalar environment is this
 core with N = 1, the native vector environment the same core with
 N = ``num_envs``. Each lane owns its episode (walk, UWB record, seed); all
 lanes step through the marker EKF of paper 001 together, one UWB sample at a
-time, in one numpy call chain (:class:`MarkerEkfEngine`).
+time, in one numpy call chain through the one marker filter of the package,
+:class:`pednav_env.nav.marker_ekf.MarkerEkfEngine` (which also serves the
+paper-001 reproduction), repaired once per decision interval.
 
 Episode: a walk of the heel–knee model (thesis eqs 4.1–4.11,
 :mod:`pednav_env.gait.heel_knee`) seen by a UWB sensor
@@ -55,8 +57,8 @@ from pednav_env.gait.heel_knee import (
     HeelKneeNominal,
     simulate_heel_knee,
 )
-from pednav_env.nav.marker_ekf import DIM_X, DIM_Z, MarkerEkfConfig
-from pednav_env.sensors.uwb import UwbSpec
+from pednav_env.nav.marker_ekf import DIM_X, DIM_Z, MarkerEkfConfig, MarkerEkfEngine
+from pednav_env.sensors.uwb import UwbSpec, measure_uwb
 
 Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -300,76 +302,6 @@ class MarkerTrackConfig:
 # --------------------------------------------------------------------------- episodes
 
 
-def measure_uwb_walker(
-    spec: UwbSpec, markers: Array, rng: np.random.Generator
-) -> tuple[Array, BoolArray]:
-    """UWB reports of one walker: :func:`pednav_env.sensors.uwb.measure_uwb`, vectorised.
-
-    Same draws in the same order and the same arithmetic as ``measure_uwb``
-    with a single walker (so the same numbers, bit for bit; a test checks it),
-    but the NLOS Markov chain is evaluated without a loop over samples: with
-    ``a = u < p_enter`` and ``b = u ≥ p_exit`` each sample maps the previous
-    state s to ``a`` (s = 0) or ``b`` (s = 1); where a = b the state is set,
-    where a > b it toggles, else it is kept, so the state is the last set
-    value XOR the parity of the toggles since.
-
-    Parameters
-    ----------
-    spec : UwbSpec
-    markers : ndarray, shape (K, 2, 2)
-        True positions (m).
-    rng : numpy.random.Generator
-
-    Returns
-    -------
-    z : ndarray, shape (K, 2, 2)
-        Reports (m); held values at dropped samples.
-    valid : ndarray of bool, shape (K, 2)
-    """
-    k = markers.shape[0]
-    noise = spec.noise_std * rng.standard_normal((k, 2, 2))
-    if spec.is_ideal:
-        return markers + noise, np.ones((k, 2), dtype=bool)
-    u_state = rng.random((k, 2))
-    burst_bias = spec.nlos_bias_std * rng.standard_normal((k, 2, 2))
-    out_flag = rng.random((k, 2)) < spec.outlier_prob
-    out_err = spec.outlier_std * rng.standard_normal((k, 2, 2))
-    u_drop = rng.random((k, 2))
-    # Terms that are identically zero for this spec are skipped (x + 0.0 == x).
-    z = markers
-    j = np.arange(k)[:, None]
-    cols = np.arange(2)[None, :]
-    if spec.nlos_start_rate_hz > 0.0:
-        a = u_state < spec.nlos_enter_prob
-        b = ~(u_state < spec.nlos_exit_prob)
-        last_set = np.maximum.accumulate(np.where(a == b, j, -1), axis=0)
-        at = np.maximum(last_set, 0)
-        toggles = np.cumsum(a & ~b, axis=0)
-        have = last_set >= 0
-        since = toggles - toggles[at, cols] * have
-        state = (have & a[at, cols]) ^ (since & 1).astype(bool)
-        entry = state.copy()
-        entry[1:] &= ~state[:-1]
-        last_entry = np.maximum(np.maximum.accumulate(np.where(entry, j, -1), axis=0), 0)
-        bias = np.where(state[..., None], burst_bias[last_entry, cols], 0.0)
-        scale = np.where(state, spec.nlos_noise_scale, 1.0)[..., None]
-        z = z + scale * noise + bias
-        dropped = u_drop < np.where(state, spec.nlos_drop_prob, spec.drop_prob)
-    else:
-        z = z + noise
-        dropped = u_drop < spec.drop_prob
-    if spec.outlier_prob > 0.0:
-        z = z + np.where(out_flag[..., None], out_err, 0.0)
-    valid = ~dropped
-    if dropped.any():  # hold the last valid report (hold_last_valid for one walker)
-        idx = np.maximum.accumulate(np.where(valid, j, -1), axis=0)
-        first = np.argmax(valid, axis=0)
-        idx = np.where(idx < 0, first[None, :], idx)
-        z = z[idx, cols]
-        z[:, ~valid.any(axis=0)] = 0.0
-    return z, valid
-
-
 @dataclass
 class Episode:
     """One lane's walk: UWB record and the truth used for reward and info."""
@@ -387,7 +319,8 @@ def generate_episode(
 
     Draw order (random scenario): duration, UWB condition (one uniform against
     the cumulative weights), σ factor, the walk
-    (:func:`simulate_heel_knee`), the UWB errors (:func:`measure_uwb_walker`).
+    (:func:`simulate_heel_knee`), the UWB errors
+    (:func:`~pednav_env.sensors.uwb.measure_uwb`).
     Paper scenario: the walk and the UWB noise only. ``gait`` may pass
     ``config.truth_gait`` precomputed.
     """
@@ -405,15 +338,17 @@ def generate_episode(
         spec = uwb_spec(condition, rate, rng.uniform(*config.noise_factor_range))
     walk = simulate_heel_knee(gait, k, [rng])
     markers = walk.markers[0]
-    z, valid = measure_uwb_walker(spec, markers, rng)
-    return Episode(z.reshape(k, DIM_Z), valid, markers.reshape(k, DIM_Z), condition)
+    uwb = measure_uwb(spec, markers[None], [rng])
+    return Episode(uwb.z[0].reshape(k, DIM_Z), uwb.valid[0], markers.reshape(k, DIM_Z), condition)
 
 
 # --------------------------------------------------------------------------- filter engine
 
 
 class Engine(Protocol):
-    """What the core needs from a batched marker filter (lane axis last)."""
+    """What the core needs from a batched marker filter (lane axis last):
+    :class:`~pednav_env.nav.marker_ekf.MarkerEkfEngine`, or the benchmark's
+    filterpy reference (``agents.bench_marker.FilterpyMarkerEngine``)."""
 
     x: Array  # (6, N)
     P: Array  # (6, 6, N)
@@ -428,196 +363,6 @@ class Engine(Protocol):
     def update(self, z: Array, valid: BoolArray, t: Array) -> Array: ...
     def markers(self, t: Array, x: Array | None = None) -> Array: ...
     def repair(self) -> BoolArray: ...
-
-
-class MarkerEkfEngine:
-    """The marker EKF of paper 001 for N lanes at once, lane axis last.
-
-    The same filter as :class:`pednav_env.nav.marker_ekf.MarkerEKF` (thesis
-    eqs 1.11–1.18 with 4.10–5.8: prediction x⁻ = F x, P⁻ = F P Fᵀ + Γ Q Γᵀ;
-    correction with h of eq 4.10 and H of eq 5.3 linearised at the prior,
-    R = σ² I; x̂ = 0 and P0 = 0.03 diag(p⁰²) at the start), written for speed:
-    arrays are ``(…, N)`` so every operation runs over the lanes in one
-    contiguous sweep, and because R is diagonal the correction processes the
-    four coordinates one after another as scalar updates with H fixed at the
-    prior — algebraically identical to the batch update of eqs 1.14–1.18
-    (tests compare it with ``filterpy.kalman.ExtendedKalmanFilter`` step by
-    step). The covariance is downdated as P − Σ w wᵀ with w = P h/√s, which
-    keeps it exactly symmetric; :meth:`repair` checks positive definiteness
-    once per decision interval with MarkerEKF's Cholesky-pivot rule.
-
-    The model is written about the anchor (t_a, X_a) (module docstring):
-    kT → t − t_a and X_a added to both x coordinates.
-
-    Returns of :meth:`update`: the normalised sequential innovations
-    ν_m = ỹ_m/√s_m (0 for skipped coordinates); Σ ν² is the NIS yᵀS⁻¹y.
-    """
-
-    def __init__(self, config: MarkerEkfConfig, num_lanes: int) -> None:
-        n = int(num_lanes)
-        self.config = config
-        self.n = n
-        proc = config.process
-        self.F = proc.F[:, None].copy()  # (6, 1), eq 5.1
-        self.FF = (proc.F[:, None] * proc.F[None, :])[:, :, None]
-        self.q0 = proc.process_noise.copy()  # diagonal of Γ Q Γᵀ, eqs 5.2, 5.4
-        self.r0 = config.meas_std**2  # eq 5.5
-        self.p0 = config.nominal.vector[:, None].copy()  # (6, 1)
-        self.M = config.nominal.shank_length
-        self.P0 = np.diag(proc.P0)  # eq 5.8
-        self.x = np.zeros((DIM_X, n))  # eq 5.7
-        self.P = np.repeat(self.P0[:, :, None], n, axis=2)
-        self.q = np.repeat(self.q0[:, None], n, axis=1)
-        self.r = np.full((DIM_Z, n), self.r0)
-        self.t_anchor = np.zeros(n)
-        self.x_anchor = np.zeros(n)
-        self.repairs = np.zeros(n, dtype=np.int64)
-        self._H = np.zeros((DIM_Z, DIM_X, n))
-        self._H[1, 3] = self._H[3, 3] = 1.0  # ∂z/∂Δc_z
-        self._W = np.zeros((DIM_Z, DIM_X, n))
-        self._nu = np.zeros((DIM_Z, n))
-
-    def reset(self, lanes: NDArray[np.integer]) -> None:
-        """Initial estimate x̂ = 0, P0 (eqs 5.7, 5.8) and anchor 0 in ``lanes``."""
-        self.x[:, lanes] = 0.0
-        self.P[:, :, lanes] = self.P0[:, :, None]
-        self.t_anchor[lanes] = 0.0
-        self.x_anchor[lanes] = 0.0
-
-    def predict(self) -> None:
-        """x⁻ = F x, P⁻ = F P Fᵀ + Γ Q Γᵀ (thesis eqs 1.11, 1.12, 5.1–5.4)."""
-        self.x *= self.F
-        self.P *= self.FF
-        self.P.reshape(DIM_X * DIM_X, self.n)[:: DIM_X + 1] += self.q
-
-    def markers(self, t: Array, x: Array | None = None) -> Array:
-        """h(p⁰ + x) at times ``t``: heel x, heel z, knee x, knee z (m).
-
-        ``t`` is ``(..., N)`` and ``x`` ``(6, ..., N)`` (default: the current
-        estimate, with ``t`` of shape ``(N,)``); returns ``(4, ..., N)``.
-        """
-        x = self.x if x is None else x
-        p = self.p0.reshape((DIM_X,) + (1,) * (x.ndim - 1)) + x
-        tau = t - self.t_anchor
-        s = np.sin(p[I_OMEGA] * tau)
-        beta = p[4] * s
-        out = np.empty((DIM_Z, *tau.shape))
-        out[0] = self.x_anchor + p[I_CX] * tau + p[0] * s
-        out[1] = p[3] + p[1] * s
-        out[2] = out[0] + self.M * np.sin(beta)
-        out[3] = out[1] + self.M * np.cos(beta)
-        return out
-
-    def update(self, z: Array, valid: BoolArray, t: Array) -> Array:
-        """Correct with one UWB sample per lane (thesis eqs 1.14–1.18, 4.12, 5.3, 5.5).
-
-        Parameters
-        ----------
-        z : ndarray, shape (4, N)
-            Reported [x₁, z₁, x₂, z₂] (m).
-        valid : ndarray of bool, shape (4, N)
-            False coordinates are skipped.
-        t : ndarray, shape (N,)
-            kT of the sample (s).
-
-        Returns
-        -------
-        ndarray, shape (4, N)
-            Normalised sequential innovations ν (0 where skipped); an internal
-            buffer, overwritten by the next call.
-        """
-        p = self.p0 + self.x
-        tau = t - self.t_anchor
-        phase = p[I_OMEGA] * tau
-        s = np.sin(phase)
-        ctau = np.cos(phase) * tau
-        beta = p[4] * s
-        Msb = self.M * np.sin(beta)
-        Mcb = self.M * np.cos(beta)
-        H = self._H  # eq 5.3, columns in eq 4.9 order
-        H[0, 0] = s
-        H[0, 2] = tau
-        H[0, 5] = p[0] * ctau
-        H[1, 1] = s
-        H[1, 5] = p[1] * ctau
-        H[2, 0] = s
-        H[2, 2] = tau
-        H[2, 4] = Mcb * s
-        dbeta = p[4] * ctau
-        H[2, 5] = H[0, 5] + Mcb * dbeta
-        H[3, 1] = s
-        H[3, 4] = -Msb * s
-        H[3, 5] = H[1, 5] - Msb * dbeta
-        hx1 = self.x_anchor + p[I_CX] * tau + p[0] * s
-        hz1 = p[3] + p[1] * s
-        y = np.empty((DIM_Z, self.n))
-        y[0] = z[0] - hx1
-        y[1] = z[1] - hz1
-        y[2] = z[2] - (hx1 + Msb)
-        y[3] = z[3] - (hz1 + Mcb)
-        if valid.all():
-            Hm = H
-        else:
-            Hm = H * valid[:, None, :]
-            y *= valid
-        # P hₘ for every row m. Reductions here are sums of < 8 terms along a lane-
-        # strided axis or einsum/matmul forms that add in the same order for any
-        # N, so a lane's numbers do not depend on the batch size (bit for bit;
-        # einsum("jn,jn->n") does not have that property at N = 1).
-        PH = np.einsum("mjn,jin->min", Hm, self.P)
-        W, nu = self._W, self._nu
-        for m in range(DIM_Z):
-            s_m = (Hm[m] * PH[m]).sum(axis=0) + self.r[m]
-            inv = 1.0 / np.sqrt(s_m)
-            np.multiply(PH[m], inv, out=W[m])
-            np.multiply(y[m], inv, out=nu[m])
-            if m < DIM_Z - 1:  # rows after m see the covariance and state after row m
-                dots = (W[m] * Hm[m + 1 :]).sum(axis=1)
-                PH[m + 1 :] -= W[m][None, :, :] * dots[:, None, :]
-                y[m + 1 :] -= dots * nu[m]
-        self.x += (W * nu[:, None, :]).sum(axis=0)
-        # Σₘ wₘ wₘᵀ per lane as one batched (6×4)(4×6) product
-        self.P -= (W.transpose(2, 1, 0) @ W.transpose(2, 0, 1)).transpose(1, 2, 0)
-        return nu
-
-    def repair(self) -> BoolArray:
-        """Floor the eigenvalues of lanes whose P fails the Cholesky-pivot test.
-
-        MarkerEKF's rule: a lane fails when a pivot drops below ``eig_floor``
-        times its largest variance; its P becomes V max(Λ, floor) Vᵀ. Lanes
-        with a non-finite P are left alone and returned (diverged).
-        """
-        P = self.P
-        diag = P.reshape(DIM_X * DIM_X, self.n)[:: DIM_X + 1]
-        finite = np.isfinite(P).all(axis=(0, 1))
-        scale = np.max(diag, axis=0)
-        floor = self.config.eig_floor * np.maximum(scale, np.finfo(float).tiny)
-        try:  # fast path: LAPACK over all lanes; its pivots are L_jj²
-            L = np.linalg.cholesky(P.transpose(2, 0, 1))
-            pivots = np.diagonal(L, axis1=1, axis2=2) ** 2  # (N, 6)
-            bad = ~(scale > 0) | ~np.all(pivots > floor[:, None], axis=1)
-        except np.linalg.LinAlgError:  # some lane is not PD: the pivot rule lane by lane
-            bad = ~(scale > 0)
-            L = np.zeros((DIM_X, DIM_X, self.n))
-            for j in range(DIM_X):
-                pivot = P[j, j] - np.einsum("kn,kn->n", L[j, :j], L[j, :j])
-                ok = pivot > floor
-                bad |= ~ok
-                L[j, j] = np.sqrt(np.where(ok, pivot, 1.0))
-                L[j + 1 :, j] = (
-                    P[j + 1 :, j] - np.einsum("ikn,kn->in", L[j + 1 :, :j], L[j, :j])
-                ) / L[j, j]
-        bad &= finite
-        if bad.any():
-            lanes = np.flatnonzero(bad)
-            Pb = P[:, :, lanes].transpose(2, 0, 1)
-            w, V = np.linalg.eigh(0.5 * (Pb + Pb.transpose(0, 2, 1)))
-            w_floor = self.config.eig_floor * np.maximum(np.abs(w[:, -1]), np.finfo(float).tiny)
-            w = np.maximum(w, w_floor[:, None])
-            fixed = (V * w[:, None, :]) @ V.transpose(0, 2, 1)
-            P[:, :, lanes] = (0.5 * (fixed + fixed.transpose(0, 2, 1))).transpose(1, 2, 0)
-            self.repairs[lanes] += 1
-        return ~finite
 
 
 EngineFactory = Callable[[MarkerEkfConfig, int], Engine]
@@ -638,7 +383,8 @@ def _sum_in_order(a: Array) -> Array:
 class MarkerTrackCore:
     """N lanes of the marker environment stepping together.
 
-    ``engine_factory`` builds the filter (default :class:`MarkerEkfEngine`);
+    ``engine_factory`` builds the filter (default
+    :class:`~pednav_env.nav.marker_ekf.MarkerEkfEngine`);
     the benchmark's reference passes a filterpy-backed one.
     """
 
@@ -900,10 +646,8 @@ __all__ = [
     "Q_GROUP",
     "UWB_CONDITIONS",
     "Episode",
-    "MarkerEkfEngine",
     "MarkerTrackConfig",
     "MarkerTrackCore",
     "generate_episode",
-    "measure_uwb_walker",
     "uwb_spec",
 ]

@@ -6,25 +6,61 @@ raw UWB positions r = [x₁, z₁, x₂, z₂] of heel and knee (eq 4.12):
 
 - prediction with the exponentially correlated model (eqs 4.11, 5.1, 5.2,
   5.4): x⁻ = F x, P⁻ = F P Fᵀ + Γ Q Γᵀ (thesis eqs 1.11, 1.12);
-- correction with h of eq 4.10 and its Jacobian H (eq 5.3), R = σ² I (eq 5.5),
-  S = H P Hᵀ + R, K = P Hᵀ S⁻¹, x = x⁻ + K y (eqs 1.14–1.17), and the
-  covariance in Joseph form P = (I − KH) P⁻ (I − KH)ᵀ + K R Kᵀ, algebraically
-  equal to the thesis's (1.18) but robust to rounding;
+- correction with h of eq 4.10 and its Jacobian H (eq 5.3) at the prior,
+  R = σ² I (eq 5.5), thesis eqs 1.14–1.18. Because R is diagonal the four
+  coordinates are processed one after another as scalar updates with H fixed
+  at the prior: for row m, s = hₘᵀ P hₘ + rₘ, w = P hₘ/√s, ν = ỹₘ/√s,
+  x ← x + w ν, P ← P − w wᵀ, and the later rows see the state and covariance
+  after the earlier ones. This is algebraically the batch update
+  K = P Hᵀ S⁻¹, x = x⁻ + K y, P = (I − KH) P⁻ (tests compare it with
+  ``filterpy.kalman.ExtendedKalmanFilter`` step by step, ≤ 1e-8 relative),
+  and Σ ν² = yᵀ S⁻¹ y is the NIS;
 - initialisation x̂ = 0 (eq 5.7), P0 = var_ratio · diag(p⁰²) (eq 5.8).
 
-Everything runs on a leading walker axis N with batched ``matmul`` and
-``np.linalg.solve`` (no inverse, no loop over walkers). After each update P is
-symmetrised; a walker whose P fails a Cholesky test (a pivot below
-``eig_floor`` times its largest variance) gets its eigenvalues floored at
-``eig_floor`` times the largest and is counted in ``repairs``.
+**Covariance form, repair and counting.** P − w wᵀ is the (I − KH) P⁻ form
+written as a symmetric rank-one downdate, not the Joseph form
+(I − KH) P⁻ (I − KH)ᵀ + K R Kᵀ (equal to it for the optimal gain, and the
+form this module used before the two marker filters were merged): it keeps
+P exactly symmetric (entries (i, j) and (j, i) are the same products added
+in the same order) at a fraction of the Joseph form's cost, but rounding can
+still cost positive definiteness when a coordinate is measured much more
+precisely than it is predicted. :meth:`MarkerEkfEngine.repair` therefore
+tests every lane with a Cholesky factorisation: a lane fails when its largest
+variance is not > 0 or a pivot drops below ``eig_floor`` times it; its P
+becomes V max(Λ, floor) Vᵀ (floor = ``eig_floor`` × the largest |λ|) and its
+``repairs`` counter goes up by one (one per repaired call, not per
+eigenvalue). Lanes whose P is not finite are not repaired but returned as
+diverged. :class:`MarkerEKF` (and so :func:`run_marker_ekf` and the paper-001
+reproduction) repairs after every update; the marker environment
+(:mod:`pednav_env.envs.marker_core`) once per decision interval, so the two
+counts are not comparable.
+
+**One filter, two faces.** :class:`MarkerEkfEngine` is the implementation:
+lane axis last (x is ``(6, N)``, P ``(6, 6, N)``), so every operation sweeps
+all lanes contiguously, with no loop over lanes and no inverse. The marker
+environment drives it directly. :class:`MarkerEKF` is its walker-first
+interface (x ``(N, 6)`` and P ``(N, 6, 6)`` are views of the engine's arrays)
+with input checks, per-call Q and R scales, filterpy-style prior/posterior
+copies and the per-update repair; :func:`run_marker_ekf` filters whole walks
+with it. Reductions over the state or the coordinates add in the same order
+for any N, so a lane's numbers do not depend on the batch size or on the
+other lanes, bit for bit (tests check it).
+
+**Time origin.** The engine writes eq 4.10 about a per-lane anchor
+(t_a, X_a): kT → t − t_a and X_a added to both x coordinates. The anchor
+(0, 0) — :class:`MarkerEKF` never moves it — is the thesis's model exactly;
+the marker environment re-anchors long walks (see its core's docstring).
 
 Our column order of H puts ∂/∂ΔA fifth and ∂/∂Δω sixth (the state order of
 eq 4.9); the thesis's printed (5.3) and (5.6) list ω before A, i.e. its H15,
 H25, H35, H45 are our column 6 and its H36, H46 our column 5.
+:func:`marker_measurement` and :func:`marker_jacobian` are h and H as plain
+functions (the filterpy oracle and the benchmark's reference use them).
 
 The action hooks of the marker environment: ``q_scale`` multiplies the
 diagonal of Γ Q Γᵀ per walker and parameter, ``r_scale`` the diagonal of R per
-walker and coordinate; samples whose ``valid`` flag is False are skipped.
+walker and coordinate (the engine's ``q`` and ``r``); samples whose ``valid``
+flag is False are skipped.
 
 :func:`lowpass_filter` is the thesis's comparison filter ("the simplest
 low-pass filter", chapter 6): a causal first-order Butterworth (RC) filter of
@@ -239,25 +275,233 @@ def _as_walker_array(name: str, value: ArrayLike | None, n: int, dim: int) -> Ar
     return out
 
 
-class MarkerEKF:
-    """Batched EKF over N walkers (thesis eqs 1.11–1.18 with 4.10–5.8).
+class MarkerEkfEngine:
+    """The marker EKF of paper 001 for N lanes at once, lane axis last.
+
+    Thesis eqs 1.11–1.18 with 4.10–5.8 (module docstring): prediction
+    x⁻ = F x, P⁻ = F P Fᵀ + Γ Q Γᵀ; correction with h of eq 4.10 and H of
+    eq 5.3 linearised at the prior, R diagonal, as four sequential scalar
+    updates with the covariance downdated as P − Σ w wᵀ; x̂ = 0 and
+    P0 = 0.03 diag(p⁰²) at the start. Arrays are ``(…, N)`` so every operation
+    runs over the lanes in one contiguous sweep. :meth:`repair` is separate so
+    that the caller chooses how often to check positive definiteness.
+
+    The model is written about the anchor (t_a, X_a) (module docstring):
+    kT → t − t_a and X_a added to both x coordinates.
 
     Attributes
     ----------
+    x : ndarray, shape (6, N)
+        Estimate of the deviations L (units of ``PARAM_UNITS``).
+    P : ndarray, shape (6, 6, N)
+        Its covariance (C-contiguous; updated in place).
+    q : ndarray, shape (6, N)
+        Diagonal of Γ Q Γᵀ used by :meth:`predict` (``q0`` at construction).
+    r : ndarray, shape (4, N)
+        Diagonal of R used by :meth:`update` (``r0`` at construction).
+    t_anchor, x_anchor : ndarray, shape (N,)
+        Time origin t_a (s) and x offset X_a (m) of the model.
+    repairs : ndarray of int, shape (N,)
+        Covariance repairs per lane since construction.
+    """
+
+    def __init__(self, config: MarkerEkfConfig, num_lanes: int) -> None:
+        if not isinstance(num_lanes, (int, np.integer)) or num_lanes < 1:
+            raise ValueError(f"num_lanes must be an integer >= 1, got {num_lanes!r}")
+        n = int(num_lanes)
+        self.config = config
+        self.n = n
+        proc = config.process
+        self.F = proc.F[:, None].copy()  # (6, 1), eq 5.1
+        self.FF = (proc.F[:, None] * proc.F[None, :])[:, :, None]
+        self.q0 = proc.process_noise.copy()  # diagonal of Γ Q Γᵀ, eqs 5.2, 5.4
+        self.r0 = config.meas_std**2  # eq 5.5
+        self.p0 = config.nominal.vector[:, None].copy()  # (6, 1)
+        self.M = config.nominal.shank_length
+        self.P0 = np.diag(proc.P0)  # eq 5.8
+        self.x = np.zeros((DIM_X, n))  # eq 5.7
+        self.P = np.repeat(self.P0[:, :, None], n, axis=2)
+        self.q = np.repeat(self.q0[:, None], n, axis=1)
+        self.r = np.full((DIM_Z, n), self.r0)
+        self.t_anchor = np.zeros(n)
+        self.x_anchor = np.zeros(n)
+        self.repairs = np.zeros(n, dtype=np.int64)
+        self._H = np.zeros((DIM_Z, DIM_X, n))
+        self._H[1, 3] = self._H[3, 3] = 1.0  # ∂z/∂Δc_z
+        self._W = np.zeros((DIM_Z, DIM_X, n))
+        self._nu = np.zeros((DIM_Z, n))
+
+    def reset(self, lanes: NDArray[np.integer]) -> None:
+        """Initial estimate x̂ = 0, P0 (eqs 5.7, 5.8) and anchor 0 in ``lanes``."""
+        self.x[:, lanes] = 0.0
+        self.P[:, :, lanes] = self.P0[:, :, None]
+        self.t_anchor[lanes] = 0.0
+        self.x_anchor[lanes] = 0.0
+
+    def predict(self) -> None:
+        """x⁻ = F x, P⁻ = F P Fᵀ + Γ Q Γᵀ (thesis eqs 1.11, 1.12, 5.1–5.4)."""
+        self.x *= self.F
+        self.P *= self.FF
+        self.P.reshape(DIM_X * DIM_X, self.n)[:: DIM_X + 1] += self.q
+
+    def markers(self, t: Array, x: Array | None = None) -> Array:
+        """h(p⁰ + x) at times ``t``: heel x, heel z, knee x, knee z (m).
+
+        ``t`` is ``(..., N)`` and ``x`` ``(6, ..., N)`` (default: the current
+        estimate, with ``t`` of shape ``(N,)``); returns ``(4, ..., N)``.
+        """
+        x = self.x if x is None else x
+        p = self.p0.reshape((DIM_X,) + (1,) * (x.ndim - 1)) + x
+        tau = t - self.t_anchor
+        s = np.sin(p[I_OMEGA] * tau)
+        beta = p[I_A] * s
+        out = np.empty((DIM_Z, *tau.shape))
+        out[0] = self.x_anchor + p[I_CX] * tau + p[I_AX] * s
+        out[1] = p[I_CZ] + p[I_AZ] * s
+        out[2] = out[0] + self.M * np.sin(beta)
+        out[3] = out[1] + self.M * np.cos(beta)
+        return out
+
+    def update(self, z: Array, valid: BoolArray, t: Array) -> Array:
+        """Correct with one UWB sample per lane (thesis eqs 1.14–1.18, 4.12, 5.3, 5.5).
+
+        Parameters
+        ----------
+        z : ndarray, shape (4, N)
+            Reported [x₁, z₁, x₂, z₂] (m); must be finite (also where skipped).
+        valid : ndarray of bool, shape (4, N)
+            False coordinates are skipped.
+        t : ndarray, shape (N,)
+            kT of the sample (s).
+
+        Returns
+        -------
+        ndarray, shape (4, N)
+            Normalised sequential innovations ν (0 where skipped); Σ ν² is the
+            NIS yᵀ S⁻¹ y. An internal buffer, overwritten by the next call.
+        """
+        p = self.p0 + self.x
+        tau = t - self.t_anchor
+        phase = p[I_OMEGA] * tau
+        s = np.sin(phase)
+        ctau = np.cos(phase) * tau
+        beta = p[I_A] * s
+        Msb = self.M * np.sin(beta)
+        Mcb = self.M * np.cos(beta)
+        H = self._H  # eq 5.3, columns in eq 4.9 order
+        H[0, I_AX] = s
+        H[0, I_CX] = tau
+        H[0, I_OMEGA] = p[I_AX] * ctau
+        H[1, I_AZ] = s
+        H[1, I_OMEGA] = p[I_AZ] * ctau
+        H[2, I_AX] = s
+        H[2, I_CX] = tau
+        H[2, I_A] = Mcb * s
+        dbeta = p[I_A] * ctau
+        H[2, I_OMEGA] = H[0, I_OMEGA] + Mcb * dbeta
+        H[3, I_AZ] = s
+        H[3, I_A] = -Msb * s
+        H[3, I_OMEGA] = H[1, I_OMEGA] - Msb * dbeta
+        hx1 = self.x_anchor + p[I_CX] * tau + p[I_AX] * s
+        hz1 = p[I_CZ] + p[I_AZ] * s
+        y = np.empty((DIM_Z, self.n))
+        y[0] = z[0] - hx1
+        y[1] = z[1] - hz1
+        y[2] = z[2] - (hx1 + Msb)
+        y[3] = z[3] - (hz1 + Mcb)
+        if valid.all():
+            Hm = H
+        else:
+            Hm = H * valid[:, None, :]
+            y *= valid
+        # P hₘ for every row m. Reductions here are sums of < 8 terms along a lane-
+        # strided axis or einsum/matmul forms that add in the same order for any
+        # N, so a lane's numbers do not depend on the batch size (bit for bit;
+        # einsum("jn,jn->n") does not have that property at N = 1).
+        PH = np.einsum("mjn,jin->min", Hm, self.P)
+        W, nu = self._W, self._nu
+        for m in range(DIM_Z):
+            s_m = (Hm[m] * PH[m]).sum(axis=0) + self.r[m]
+            inv = 1.0 / np.sqrt(s_m)
+            np.multiply(PH[m], inv, out=W[m])
+            np.multiply(y[m], inv, out=nu[m])
+            if m < DIM_Z - 1:  # rows after m see the covariance and state after row m
+                dots = (W[m] * Hm[m + 1 :]).sum(axis=1)
+                PH[m + 1 :] -= W[m][None, :, :] * dots[:, None, :]
+                y[m + 1 :] -= dots * nu[m]
+        self.x += (W * nu[:, None, :]).sum(axis=0)
+        # Σₘ wₘ wₘᵀ per lane as one batched (6×4)(4×6) product
+        self.P -= (W.transpose(2, 1, 0) @ W.transpose(2, 0, 1)).transpose(1, 2, 0)
+        return nu
+
+    def repair(self) -> BoolArray:
+        """Floor the eigenvalues of lanes whose P fails the Cholesky-pivot test.
+
+        A lane fails when its largest variance is not > 0 or a pivot drops
+        below ``eig_floor`` times it; its P becomes V max(Λ, floor) Vᵀ and its
+        ``repairs`` count goes up by one. Lanes with a non-finite P are left
+        alone and returned (diverged).
+
+        Returns
+        -------
+        ndarray of bool, shape (N,)
+            True where P is not finite.
+        """
+        P = self.P
+        diag = P.reshape(DIM_X * DIM_X, self.n)[:: DIM_X + 1]
+        finite = np.isfinite(P).all(axis=(0, 1))
+        scale = np.max(diag, axis=0)
+        floor = self.config.eig_floor * np.maximum(scale, np.finfo(float).tiny)
+        try:  # fast path: LAPACK over all lanes; its pivots are L_jj²
+            L = np.linalg.cholesky(P.transpose(2, 0, 1))
+            pivots = np.diagonal(L, axis1=1, axis2=2) ** 2  # (N, 6)
+            bad = ~(scale > 0) | ~np.all(pivots > floor[:, None], axis=1)
+        except np.linalg.LinAlgError:  # some lane is not PD: the pivot rule lane by lane
+            bad = ~(scale > 0)
+            L = np.zeros((DIM_X, DIM_X, self.n))
+            for j in range(DIM_X):
+                pivot = P[j, j] - np.einsum("kn,kn->n", L[j, :j], L[j, :j])
+                ok = pivot > floor
+                bad |= ~ok
+                L[j, j] = np.sqrt(np.where(ok, pivot, 1.0))
+                L[j + 1 :, j] = (
+                    P[j + 1 :, j] - np.einsum("ikn,kn->in", L[j + 1 :, :j], L[j, :j])
+                ) / L[j, j]
+        bad &= finite
+        if bad.any():
+            lanes = np.flatnonzero(bad)
+            Pb = P[:, :, lanes].transpose(2, 0, 1)
+            w, V = np.linalg.eigh(0.5 * (Pb + Pb.transpose(0, 2, 1)))
+            w_floor = self.config.eig_floor * np.maximum(np.abs(w[:, -1]), np.finfo(float).tiny)
+            w = np.maximum(w, w_floor[:, None])
+            fixed = (V * w[:, None, :]) @ V.transpose(0, 2, 1)
+            P[:, :, lanes] = (0.5 * (fixed + fixed.transpose(0, 2, 1))).transpose(1, 2, 0)
+            self.repairs[lanes] += 1
+        return ~finite
+
+
+class MarkerEKF:
+    """Walker-first interface to :class:`MarkerEkfEngine` (N walkers, anchor 0).
+
+    Checks its inputs, takes the Q and R scales per call, keeps filterpy's
+    prior/posterior copies and repairs the covariance after every update
+    (module docstring). ``x`` and ``P`` are views of the engine's arrays:
+    writing into them writes into the filter.
+
+    Attributes
+    ----------
+    engine : MarkerEkfEngine
+        The filter itself.
     x : ndarray, shape (N, 6)
         Estimate of the deviations L (units of ``PARAM_UNITS``).
     P : ndarray, shape (N, 6, 6)
         Its covariance.
     x_prior, P_prior, x_post, P_post : ndarray
-        Prior and posterior of the last step (filterpy's convention).
-    y : ndarray, shape (N, 4)
-        Last innovation (0 in skipped rows).
-    S : ndarray, shape (N, 4, 4)
-        Last innovation covariance (identity rows/columns where skipped).
-    K : ndarray, shape (N, 6, 4)
-        Last gain (zero columns where skipped).
+        Prior and posterior of the last step (filterpy's convention; copies).
+    nu : ndarray, shape (N, 4)
+        Normalised sequential innovations of the last update (0 where skipped).
     nis : ndarray, shape (N,)
-        Last normalised innovation squared yᵀ S⁻¹ y over the valid rows.
+        Last normalised innovation squared yᵀ S⁻¹ y = Σ ν² over the valid rows.
     num_valid : ndarray of int, shape (N,)
         Number of valid rows in the last update.
     repairs : ndarray of int, shape (N,)
@@ -268,38 +512,49 @@ class MarkerEKF:
         if not isinstance(num_walkers, (int, np.integer)) or num_walkers < 1:
             raise ValueError(f"num_walkers must be an integer >= 1, got {num_walkers!r}")
         self.config = config
-        self.num_walkers = int(num_walkers)
-        proc = config.process
-        self._F = proc.F
-        self._FF = np.outer(proc.F, proc.F)
-        self._q = proc.process_noise
-        self._p0 = config.nominal.vector
-        self._M = config.nominal.shank_length
-        self._r = np.full(DIM_Z, config.meas_std**2)
-        n = self.num_walkers
-        self.x = np.zeros((n, DIM_X))  # eq 5.7
-        self.P = np.broadcast_to(np.diag(proc.P0), (n, DIM_X, DIM_X)).copy()  # eq 5.8
+        self.num_walkers = n = int(num_walkers)
+        self.engine = MarkerEkfEngine(config, n)
         self.x_prior, self.P_prior = self.x.copy(), self.P.copy()
         self.x_post, self.P_post = self.x.copy(), self.P.copy()
-        self.y = np.zeros((n, DIM_Z))
-        self.S = np.zeros((n, DIM_Z, DIM_Z))
-        self.K = np.zeros((n, DIM_X, DIM_Z))
+        self.nu = np.zeros((n, DIM_Z))
         self.nis = np.zeros(n)
         self.num_valid = np.zeros(n, dtype=np.int64)
-        self.repairs = np.zeros(n, dtype=np.int64)
+
+    @property
+    def x(self) -> Array:
+        """Estimate, ``(N, 6)`` (a view of the engine's ``(6, N)`` array)."""
+        return self.engine.x.T
+
+    @x.setter
+    def x(self, value: ArrayLike) -> None:
+        self.engine.x[...] = np.asarray(value, dtype=float).T
+
+    @property
+    def P(self) -> Array:
+        """Covariance, ``(N, 6, 6)`` (a view of the engine's ``(6, 6, N)`` array)."""
+        return self.engine.P.transpose(2, 0, 1)
+
+    @P.setter
+    def P(self, value: ArrayLike) -> None:
+        self.engine.P[...] = np.asarray(value, dtype=float).transpose(1, 2, 0)
+
+    @property
+    def repairs(self) -> NDArray[np.int64]:
+        """Covariance repairs per walker, ``(N,)`` (the engine's counter)."""
+        return self.engine.repairs
 
     @property
     def params(self) -> Array:
         """Estimated full parameters p⁰ + x̂, shape ``(N, 6)``."""
-        return self._p0 + self.x
+        return self.config.nominal.vector + self.x
 
     def process_noise(self, q_scale: ArrayLike | None = None) -> Array:
         """Diagonal of Γ Q Γᵀ times ``q_scale``, shape ``(N, 6)``."""
-        return self._q * _as_walker_array("q_scale", q_scale, self.num_walkers, DIM_X)
+        return self.engine.q0 * _as_walker_array("q_scale", q_scale, self.num_walkers, DIM_X)
 
     def measurement_noise(self, r_scale: ArrayLike | None = None) -> Array:
         """Diagonal of R times ``r_scale``, shape ``(N, 4)``."""
-        return self._r * _as_walker_array("r_scale", r_scale, self.num_walkers, DIM_Z)
+        return self.engine.r0 * _as_walker_array("r_scale", r_scale, self.num_walkers, DIM_Z)
 
     def predict(self, q_scale: ArrayLike | None = None) -> None:
         """x⁻ = F x, P⁻ = F P Fᵀ + Γ Q Γᵀ (eqs 4.11, 5.1, 5.2, 5.4; thesis 1.11–1.12).
@@ -310,10 +565,8 @@ class MarkerEKF:
             Positive multipliers of Γ Q Γᵀ's diagonal: a scalar, ``(N,)`` (one
             per walker), or ``(1, 6)`` / ``(N, 6)`` (per parameter).
         """
-        q = self.process_noise(q_scale)
-        self.x = self._F * self.x
-        self.P = self.P * self._FF
-        self.P[:, np.arange(DIM_X), np.arange(DIM_X)] += q
+        self.engine.q[...] = self.process_noise(q_scale).T
+        self.engine.predict()
         self.x_prior, self.P_prior = self.x.copy(), self.P.copy()
 
     def update(
@@ -325,6 +578,9 @@ class MarkerEKF:
     ) -> None:
         """Correct with one UWB sample per walker (eqs 4.12, 5.3, 5.5; thesis 1.14–1.18).
 
+        Then repair the covariance where it is no longer positive definite
+        (counted in ``repairs``).
+
         Parameters
         ----------
         z : array_like, shape (N, 4) or (N, 2, 2)
@@ -333,7 +589,7 @@ class MarkerEKF:
             kT of the sample (s).
         valid : array_like of bool, shape (N, 2) or (N, 4), optional
             Per marker or per coordinate; False rows are skipped (their values
-            in ``z`` are ignored).
+            in ``z`` are ignored and may be NaN).
         r_scale : array_like, optional
             Positive multipliers of R's diagonal: a scalar, ``(N,)`` (one per
             walker), or ``(1, 4)`` / ``(N, 4)`` (per coordinate).
@@ -363,62 +619,22 @@ class MarkerEKF:
                 raise ValueError(f"valid must have shape ({n}, 2) or ({n}, 4), got {v.shape}")
         if not np.all(np.isfinite(zz[ok])):
             raise ValueError("z must be finite where valid (found NaN or inf)")
-        r = self.measurement_noise(r_scale)
-
-        params = self._p0 + self.x
-        H = marker_jacobian(params, tt, self._M)  # (N, 4, 6)
-        y = zz - marker_measurement(params, tt, self._M)
-        H = np.where(ok[:, :, None], H, 0.0)
-        y = np.where(ok, y, 0.0)
-        r = np.where(ok, r, 1.0)  # decoupled unit rows where skipped: K column = 0
-
-        HP = H @ self.P  # (N, 4, 6)
-        S = HP @ H.transpose(0, 2, 1)
-        S[:, np.arange(DIM_Z), np.arange(DIM_Z)] += r
-        # One solve for K and the NIS: S⁻¹ [H P | y] (S is symmetric).
-        sol = np.linalg.solve(S, np.concatenate((HP, y[:, :, None]), axis=2))
-        K = sol[:, :, :DIM_X].transpose(0, 2, 1)  # (N, 6, 4) = P Hᵀ S⁻¹
-        self.nis = np.einsum("ni,ni->n", y, sol[:, :, DIM_X])
-        self.x = self.x + np.einsum("nij,nj->ni", K, y)
-        I_KH = np.eye(DIM_X) - K @ H
-        KRKt = (K * np.where(ok, r, 0.0)[:, None, :]) @ K.transpose(0, 2, 1)
-        P = I_KH @ self.P @ I_KH.transpose(0, 2, 1) + KRKt  # Joseph form
-        self.P = self._repair(0.5 * (P + P.transpose(0, 2, 1)))
-        self.y, self.S, self.K = y, S, K
+        e = self.engine
+        e.r[...] = self.measurement_noise(r_scale).T
+        if not ok.all():
+            zz = np.where(ok, zz, 0.0)  # skipped values are never used (may be NaN)
+        nu = e.update(zz.T, ok.T, np.broadcast_to(tt, (n,)))
+        self.nu = nu.T.copy()
+        self.nis = (nu * nu).sum(axis=0)
         self.num_valid = ok.sum(axis=1)
+        e.repair()
         self.x_post, self.P_post = self.x.copy(), self.P.copy()
-
-    def _repair(self, P: Array) -> Array:
-        """Floor the eigenvalues of walkers whose P is not positive definite.
-
-        The test is a Cholesky factorisation vectorised over walkers: a walker
-        fails when a pivot drops below ``eig_floor`` times its largest
-        diagonal element. Failing walkers get P = V max(Λ, floor) Vᵀ.
-        """
-        scale = np.max(np.diagonal(P, axis1=1, axis2=2), axis=1)
-        floor = self.config.eig_floor * np.maximum(scale, np.finfo(float).tiny)
-        bad = ~(scale > 0)
-        L = np.zeros_like(P)
-        for j in range(DIM_X):
-            pivot = P[:, j, j] - np.einsum("nk,nk->n", L[:, j, :j], L[:, j, :j])
-            bad |= ~(pivot > floor)
-            L[:, j, j] = np.sqrt(np.where(pivot > floor, pivot, 1.0))
-            L[:, j + 1 :, j] = (
-                P[:, j + 1 :, j] - np.einsum("nik,nk->ni", L[:, j + 1 :, :j], L[:, j, :j])
-            ) / L[:, j, j, None]
-        if np.any(bad):
-            w, V = np.linalg.eigh(P[bad])
-            w_floor = self.config.eig_floor * np.maximum(np.abs(w[:, -1]), np.finfo(float).tiny)
-            w = np.maximum(w, w_floor[:, None])
-            P = P.copy()
-            fixed = (V * w[:, None, :]) @ V.transpose(0, 2, 1)
-            P[bad] = 0.5 * (fixed + fixed.transpose(0, 2, 1))
-            self.repairs[bad] += 1
-        return P
 
     def markers(self, t: ArrayLike) -> Array:
         """Estimated marker positions h(p⁰ + x̂) at ``t``, shape ``(N, 2, 2)`` (m)."""
-        return heel_knee_positions(self.params, t, self._M)
+        n = self.num_walkers
+        tt = np.broadcast_to(np.asarray(t, dtype=float), (n,))
+        return self.engine.markers(tt).T.reshape(n, 2, 2)
 
 
 @dataclass(frozen=True)
@@ -454,7 +670,7 @@ def run_marker_ekf(
     q_scale: ArrayLike | None = None,
     r_scale: ArrayLike | None = None,
 ) -> MarkerEkfRun:
-    """Filter whole walks sampled at t_k = kT, k = 0 … K−1.
+    """Filter whole walks sampled at t_k = kT, k = 0 … K−1 (:class:`MarkerEKF`).
 
     The first sample is corrected from the initial prior (eqs 5.7, 5.8); each
     later one is predicted then corrected.
@@ -478,23 +694,29 @@ def run_marker_ekf(
         if valid.shape != (n, k, 2):
             raise ValueError(f"valid must have shape ({n}, {k}, 2), got {valid.shape}")
     ekf = MarkerEKF(config, n)
-    x = np.empty((n, k, DIM_X))
+    xs = np.empty((DIM_X, k, n))  # lane axis last, as the engine
     P_diag = np.empty((n, k, DIM_X))
     nis = np.empty((n, k))
     num_valid = np.empty((n, k), dtype=np.int64)
-    est = np.empty((n, k, 2, 2))
     T = config.sample_period
     for j in range(k):
         if j > 0:
             ekf.predict(q_scale)
         ekf.update(zz[:, j], j * T, None if valid is None else valid[:, j], r_scale)
-        x[:, j] = ekf.x
+        xs[:, j] = ekf.engine.x
         P_diag[:, j] = np.diagonal(ekf.P, axis1=1, axis2=2)
         nis[:, j] = ekf.nis
         num_valid[:, j] = ekf.num_valid
-        est[:, j] = ekf.markers(j * T)
+    # h(x̂ₖ) of every sample in one call (elementwise: the same numbers as per step)
+    times = np.broadcast_to((np.arange(k) * T)[:, None], (k, n))
+    est = ekf.engine.markers(times, xs)  # (4, K, N)
     return MarkerEkfRun(
-        x=x, P_diag=P_diag, markers=est, nis=nis, num_valid=num_valid, repairs=ekf.repairs.copy()
+        x=xs.transpose(2, 1, 0),
+        P_diag=P_diag,
+        markers=est.transpose(2, 1, 0).reshape(n, k, 2, 2),
+        nis=nis,
+        num_valid=num_valid,
+        repairs=ekf.repairs.copy(),
     )
 
 
