@@ -9,6 +9,8 @@ Subcommands (their JSON formats are contracts, see DESIGN.md):
 - ``pednav train ENV_ID --algo ppo|sac [--timesteps N] [--seed S] [--n-envs K]
   [--config FILE] [--run-dir DIR] [--resume]`` — train a tuner (SB3).
 - ``pednav tune ENV_ID`` — CMA-ES search of the tuned-fixed baseline.
+- ``pednav run RECORDING [--format F] [--policy NAME] [--json] [--plot FILE]``
+  — the ZUPT-UKF on a recorded walk (docs/REAL_DATA.md).
 - ``pednav bench ENV [--json] [--sizes N ...]`` — env steps/s of the native
   vector env against a filterpy reference (ENV = foot, waist, marker).
 """
@@ -93,6 +95,16 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_run(args: argparse.Namespace) -> int:
+    from agents.run_recording import format_text, run
+
+    summary, rec = run(args.recording, args.format, args.policy, args.mounting, plot=args.plot)
+    if rec.issues:
+        print(rec.summary(), file=sys.stderr)
+    print(json.dumps(summary) if args.json else format_text(rec.name, summary))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pednav",
@@ -174,6 +186,19 @@ def build_parser() -> argparse.ArgumentParser:
     )
     be.add_argument("--json", action="store_true", help="print one JSON object (DESIGN.md)")
     be.set_defaults(func=_cmd_bench)
+
+    ru = sub.add_parser("run", help="run the ZUPT-UKF on a recording (docs/REAL_DATA.md)")
+    ru.add_argument("recording", help="a .csv or .mat recording")
+    ru.add_argument("--format", default="auto", help="auto, csv, xio or pyshoe (default auto)")
+    ru.add_argument(
+        "--policy",
+        default="paper",
+        help="paper, real-fixed, or a policy name/path as in `pednav evaluate` (default paper)",
+    )
+    ru.add_argument("--mounting", default=None, help="auto, none or axes like x,-y,-z")
+    ru.add_argument("--json", action="store_true", help="print one JSON object")
+    ru.add_argument("--plot", metavar="FILE", default=None, help="write a top view to FILE")
+    ru.set_defaults(func=_cmd_run)
     return parser
 
 

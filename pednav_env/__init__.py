@@ -39,3 +39,10 @@ if "pednav/WaistStep-v0" not in registry:
         entry_point="pednav_env.envs.waist_step:WaistStepEnv",
         vector_entry_point="pednav_env.envs.waist_step:WaistStepVectorEnv",
     )
+
+if "pednav/FootZuptReplay-v0" not in registry:
+    register(
+        id="pednav/FootZuptReplay-v0",
+        entry_point="pednav_env.envs.foot_replay:FootZuptReplayEnv",
+        vector_entry_point="pednav_env.envs.foot_replay:FootZuptReplayVectorEnv",
+    )

@@ -198,7 +198,8 @@ class FootZuptEnv(gym.Env):
         a = np.asarray(action, dtype=np.float64)
         if a.shape != self.action_space.shape:
             raise ValueError(
-                f"{ENV_ID}: action must have shape {self.action_space.shape}, got {a.shape}"
+                f"{self.core.env_name}: action must have shape {self.action_space.shape}, "
+                f"got {a.shape}"
             )
         obs, reward, terminated, truncated, info = self.core.step(a[None, :])
         out = {k: (v[0].copy() if np.ndim(v) > 1 else v[0].item()) for k, v in info.items()}
@@ -213,7 +214,7 @@ class FootZuptEnv(gym.Env):
 
     def render(self):
         if self.render_mode is None:
-            gym.logger.warn(f"{ENV_ID}: render() called without a render_mode")
+            gym.logger.warn(f"{self.core.env_name}: render() called without a render_mode")
             return None
         import matplotlib
 
@@ -296,7 +297,9 @@ class FootZuptVectorEnv(VectorEnv):
         else:
             seeds = list(seed)
             if len(seeds) != self.num_envs:
-                raise ValueError(f"{ENV_ID}: {len(seeds)} seeds for {self.num_envs} envs")
+                raise ValueError(
+                    f"{self.core.env_name}: {len(seeds)} seeds for {self.num_envs} envs"
+                )
         if seed is not None or self._lane_rngs is None:
             self._lane_rngs = [seeding.np_random(s)[0] for s in seeds]
         self.core.reset_lanes(np.arange(self.num_envs), self._lane_rngs)
@@ -305,7 +308,7 @@ class FootZuptVectorEnv(VectorEnv):
 
     def step(self, actions):
         if self._lane_rngs is None:
-            raise RuntimeError(f"{ENV_ID}: call reset() before step()")
+            raise RuntimeError(f"{self.core.env_name}: call reset() before step()")
         obs, reward, terminated, truncated, info = self.core.step(actions)
         info["imu_grade"] = np.array(self.core.grade, dtype=object)
         done = terminated | truncated

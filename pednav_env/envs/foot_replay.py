@@ -1,0 +1,186 @@
+"""``pednav/FootZuptReplay-v0``: the FootZupt contract over recorded trials."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode
+
+from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
+from pednav_env.envs.foot_zupt import FootZuptEnv, FootZuptVectorEnv, _spaces
+
+ENV_ID = "pednav/FootZuptReplay-v0"
+
+
+def _make_config(config: FootReplayConfig | None, **overrides: Any) -> FootReplayConfig:
+    fields = {k: v for k, v in overrides.items() if v is not None}
+    if config is None:
+        return FootReplayConfig(**fields)
+    return replace(config, **fields) if fields else config
+
+
+class FootZuptReplayEnv(FootZuptEnv):
+    """
+    ## Description
+    :class:`pednav_env.envs.foot_zupt.FootZuptEnv` with recorded walks in
+    place of simulated ones: a foot-mounted IMU recording with a reference
+    track (e.g. the PyShoe VICON trials) is played through the same
+    ZUPT-UKF, and the agent retunes it every ``decision_interval_s`` of data.
+    Action space, observation space, reward, termination and info are those
+    of ``pednav/FootZupt-v0`` (see its docstring), so a tuner trained in
+    simulation runs here unchanged, and action 0 is the same filter as there
+    (eq 5 at 0.22 rad/s and 0.33 m/s², paper 003's noise model, gyro-bias
+    calibration on the still start).
+
+    An episode is one whole trial, chosen by the reset seed (uniformly) from
+    the recordings in ``data_dir`` (``.mat`` PyShoe trials or CSV files with
+    truth columns, :mod:`pednav_env.io`; all at one sample rate). Before the
+    filter sees them the samples are put on a uniform grid, rotated so that
+    the still start's specific force points up, and the still start (at most
+    1 s) is the alignment window (paper 003 eq 4).
+
+    ## Action Space
+    ``Box(-1, 1, (4,), float32)`` (``(5,)`` with ``tune_min_stance=True``):
+    ω_max, Δf_max, process-noise scale, ZUPT-noise scale (and minimum stance),
+    exactly as in ``pednav/FootZupt-v0``.
+
+    ## Observation Space
+    ``Box(low, high, (16 + k,), float32)``, the features of
+    ``pednav/FootZupt-v0`` computed from the recorded IMU and the filter.
+
+    ## Rewards
+    ``−e · Δ / D`` per step as in ``pednav/FootZupt-v0``; e is the horizontal
+    distance between the estimate and the reference, with the reference
+    turned about the vertical by an angle fixed per trial (fitted to a run of
+    the ``real-fixed`` filter; heading is unobservable at the start). The
+    return is minus the time-averaged horizontal error.
+
+    ## Starting State
+    The still start of the trial (0.1–1 s): alignment and gyro-bias
+    calibration; navigation starts at its end, at position 0.
+
+    ## Episode End
+    Truncation at the end of the trial; termination on divergence as in
+    ``pednav/FootZupt-v0``.
+
+    ## Arguments
+    ``gymnasium.make("pednav/FootZuptReplay-v0", data_dir=DIR,
+    decision_interval_s=0.5, tune_min_stance=False, config=None,
+    render_mode=None)``; ``config`` is a full
+    :class:`pednav_env.envs.foot_replay_core.FootReplayConfig` (filter setup,
+    reference setup, load options, divergence bounds). ``data_dir`` is required.
+
+    ## Vectorized environment
+    ``gymnasium.make_vec("pednav/FootZuptReplay-v0", num_envs=N,
+    vectorization_mode="vector_entry_point", data_dir=DIR)``: one batched
+    filter, SAME_STEP autoreset; lane i reset with seed s plays the trials
+    that this env plays reset with seed s + i.
+
+    ## Info
+    That of ``pednav/FootZupt-v0`` (``imu_grade`` is ``"recorded"``), plus
+    ``trial`` (the recording's name) and ``heading_offset`` (rad, the fixed
+    rotation of the reference). ``true_stance_detections`` counts detected
+    stance starts inside reference stance labels.
+
+    ## Version History
+    - v0: initial version.
+    """
+
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 4}
+
+    def __init__(
+        self,
+        data_dir: str | None = None,
+        decision_interval_s: float | None = None,
+        tune_min_stance: bool | None = None,
+        config: FootReplayConfig | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        self.replay_config = _make_config(
+            config,
+            data_dir=None if data_dir is None else str(data_dir),
+            decision_interval_s=decision_interval_s,
+            tune_min_stance=tune_min_stance,
+        )
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"{ENV_ID}: render_mode must be one of "
+                f"{self.metadata['render_modes']}, got {render_mode!r}"
+            )
+        self.render_mode = render_mode
+        self.core = FootReplayCore(self.replay_config, 1, ENV_ID)
+        self.config = self.core.config
+        self.action_space, self.observation_space = _spaces(self.config, self.core)
+        self._track_true: list[np.ndarray] = []
+        self._track_est: list[np.ndarray] = []
+        self._figure = None
+
+    def _info_reset(self) -> dict[str, Any]:
+        info = super()._info_reset()
+        info["trial"] = self.core.trial_name[0]
+        info["heading_offset"] = float(self.core.heading_offset[0])
+        return info
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = super().step(action)
+        info["trial"] = self.core.trial_name[0]
+        info["heading_offset"] = float(self.core.heading_offset[0])
+        return obs, reward, terminated, truncated, info
+
+
+class FootZuptReplayVectorEnv(FootZuptVectorEnv):
+    """Native vector version of :class:`FootZuptReplayEnv` (see its docstring):
+    one batched filter for all ``num_envs`` trials, SAME_STEP autoreset."""
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        data_dir: str | None = None,
+        decision_interval_s: float | None = None,
+        tune_min_stance: bool | None = None,
+        config: FootReplayConfig | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        if render_mode is not None:
+            raise ValueError(f"{ENV_ID}: the vector env does not render; got {render_mode!r}")
+        self.replay_config = _make_config(
+            config,
+            data_dir=None if data_dir is None else str(data_dir),
+            decision_interval_s=decision_interval_s,
+            tune_min_stance=tune_min_stance,
+        )
+        self.num_envs = int(num_envs)
+        self.core = FootReplayCore(self.replay_config, self.num_envs, ENV_ID)
+        self.config = self.core.config
+        self.single_action_space, self.single_observation_space = _spaces(self.config, self.core)
+        self.action_space = spaces.Box(
+            -1.0, 1.0, (self.num_envs, self.config.action_dim), np.float32
+        )
+        self.observation_space = spaces.Box(
+            np.tile(self.core.obs_low, (self.num_envs, 1)),
+            np.tile(self.core.obs_high, (self.num_envs, 1)),
+            dtype=np.float32,
+        )
+        self.render_mode = None
+        self._lane_rngs: list[np.random.Generator] | None = None
+
+    def _trial_info(self, info: dict) -> dict:
+        info["trial"] = np.array(self.core.trial_name, dtype=object)
+        info["heading_offset"] = self.core.heading_offset.copy()
+        return info
+
+    def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None):
+        obs, info = super().reset(seed=seed, options=options)
+        return obs, self._trial_info(info)
+
+    def step(self, actions):
+        obs, reward, terminated, truncated, info = super().step(actions)
+        return obs, reward, terminated, truncated, self._trial_info(info)
+
+
+__all__ = ["ENV_ID", "FootZuptReplayEnv", "FootZuptReplayVectorEnv"]

@@ -1,0 +1,276 @@
+"""Batched episode engine behind ``pednav/FootZuptReplay-v0``: recorded trials.
+
+The simulated foot environment's core (:class:`FootZuptCore`) with its
+episodes replaced by recorded trials: the same filter, action knobs,
+observation features, reward, termination and info, so that a tuner trained
+in simulation runs here unchanged. Only the episode source differs.
+
+Per trial (cached per env after its first use):
+
+- the recording is loaded and prepared as :func:`pednav_env.replay.runner.prepare`
+  does (uniform grid, mounting, still start of its own length);
+- the truth is moved into the filter's navigation frame: referred to its
+  position at the end of the alignment and turned about the vertical by the
+  angle that best fits (least squares) the track of a *reference run* — the
+  filter with the ``reference`` setup (``real-fixed``) over the whole trial.
+  The angle is fixed per trial, whatever the agent does: heading is
+  unobservable at the start and this removes it the same way for every policy;
+- NaN truth rows are linearly interpolated from their neighbours;
+- the truth stance labels (for ``true_stance_detections``) are the data's
+  own when present (PyShoe's ``zv_vicon_opt``), else samples whose truth
+  speed (0.05 s mean) is below 0.15 m/s;
+- distance walked: the path length of the truth smoothed over 0.05 s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from pednav_env.envs.foot_core import FootZuptConfig, FootZuptCore
+from pednav_env.io.load import find_recordings, load_recording
+from pednav_env.io.recording import Recording
+from pednav_env.io.validate import LoadOptions
+from pednav_env.nav.detectors import ThresholdDetectorConfig, causal_moving_mean, window_samples
+from pednav_env.nav.zupt_ukf import ZuptUkfConfig
+from pednav_env.replay.metrics import best_rotation, rotate_h
+from pednav_env.replay.runner import PreparedRecording, prepare, run_prepared
+from pednav_env.replay.setup import RealFilterSetup, named_setup
+
+Array = NDArray[np.float64]
+
+#: Truth-speed threshold for stance labels when the data have none (m/s).
+TRUTH_STANCE_SPEED = 0.15
+#: Smoothing of the truth for speed and distance (s).
+TRUTH_SMOOTHING_S = 0.05
+
+
+def _default_setup() -> RealFilterSetup:
+    # Action 0 = the simulated env's action-0 filter (FootZuptConfig, random
+    # scenario): eq (5) at 0.22 rad/s / 0.33 m/s², gyro-bias calibration.
+    return RealFilterSetup(filter=ZuptUkfConfig(calibrate_gyro_bias=True))
+
+
+@dataclass(frozen=True)
+class FootReplayConfig:
+    """Settings of the replay environment.
+
+    ``data_dir``: a directory of recordings with truth (``.mat``/``.csv``,
+    see :mod:`pednav_env.io`), all at one sample rate (±1 %); required by the
+    environments (the core can also replay in-memory recordings).
+    ``setup``: the filter at action 0 and the real-data steps; its detector
+    must be eq (5) (the knobs set its thresholds). ``reference``: the named
+    setup whose run fixes the truth heading (``real-fixed``).
+    """
+
+    data_dir: str | None = None
+    decision_interval_s: float = 0.5
+    setup: RealFilterSetup = field(default_factory=_default_setup)
+    reference: str = "real-fixed"
+    tune_min_stance: bool = False
+    divergence_error_m: float = 25.0
+    divergence_error_fraction: float = 0.25
+    load_options: LoadOptions = field(default_factory=LoadOptions)
+
+    def __post_init__(self) -> None:
+        if self.data_dir is not None and not Path(self.data_dir).is_dir():
+            raise ValueError(f"FootReplayConfig.data_dir: {self.data_dir!r} is not a directory")
+        if not isinstance(self.setup.filter.detector, ThresholdDetectorConfig):
+            raise ValueError(
+                "FootReplayConfig.setup: the detector must be eq (5) (ThresholdDetectorConfig): "
+                "the action sets its thresholds"
+            )
+        if self.setup.gravity != "standard":
+            raise ValueError("FootReplayConfig.setup.gravity must be 'standard' (one g per batch)")
+        if not (math.isfinite(self.decision_interval_s) and self.decision_interval_s > 0):
+            raise ValueError(f"decision_interval_s must be > 0, got {self.decision_interval_s!r}")
+        named_setup(self.reference)  # validates the name
+
+
+@dataclass
+class Trial:
+    """One prepared trial with its truth in the navigation frame."""
+
+    name: str
+    prepared: PreparedRecording
+    pos_n: Array  # (M+1, 3) truth after c samples, nav frame, 0 at the alignment end
+    stance: NDArray[np.bool_]  # (M,)
+    distance_m: Array  # (M+1,)
+    heading_offset_rad: float
+
+
+def _fill_nan(truth: Array) -> Array:
+    ok = np.isfinite(truth).all(axis=1)
+    if ok.all():
+        return truth
+    idx = np.arange(len(truth))
+    return np.stack([np.interp(idx, idx[ok], truth[ok, c]) for c in range(3)], axis=1)
+
+
+def build_trial(rec: Recording, config: FootReplayConfig, require_truth: bool = True) -> Trial:
+    """Prepare one trial (see the module docstring). Without truth (allowed when
+    ``require_truth`` is False) the truth track is zero and no reference run is made."""
+    if not rec.has_truth:
+        if require_truth:
+            raise ValueError(f"{rec.name}: the replay environment needs recordings with truth")
+        prep = prepare(rec, config.setup)
+        m = prep.num_samples
+        zeros = np.zeros((m + 1, 3))
+        return Trial(rec.name, prep, zeros, np.zeros(m, dtype=bool), np.zeros(m + 1), 0.0)
+    prep = prepare(rec, config.setup)
+    truth = _fill_nan(np.asarray(prep.truth_pos, dtype=float))
+    ref_setup = replace(named_setup(config.reference), mounting=config.setup.mounting)
+    ref_setup = replace(
+        ref_setup,
+        alignment_max_s=config.setup.alignment_max_s,
+        alignment_min_s=config.setup.alignment_min_s,
+    )
+    ref = run_prepared(prepare(rec, ref_setup), interval_s=config.decision_interval_s)
+    na = prep.n_align
+    start = truth[na - 1]
+    est_h = ref.pos[0, na:, :2]
+    phi = best_rotation(est_h, truth[na:, :2] - start[:2])
+    rel = truth - start
+    pos_samples = np.concatenate((rotate_h(rel[:, :2], phi), rel[:, 2:3]), axis=1)
+    pos_n = np.concatenate((pos_samples[:1], pos_samples), axis=0)
+    rate = prep.rate_hz
+    n = window_samples(TRUTH_SMOOTHING_S, rate)
+    smooth = causal_moving_mean(pos_samples[None], n)[0]
+    step = np.linalg.norm(np.diff(smooth[:, :2], axis=0), axis=1)
+    dist_samples = np.concatenate(([0.0], np.cumsum(step)))
+    distance = np.concatenate(([0.0], dist_samples))
+    labels = rec.metadata.get("reference_stance")
+    m = prep.num_samples
+    if labels is not None and len(labels) == m and not prep.uniform.filled.any():
+        stance = np.asarray(labels, dtype=bool)
+    else:
+        speed = np.concatenate(([0.0], step * rate))
+        stance = causal_moving_mean(speed[None], n)[0] < TRUTH_STANCE_SPEED
+    return Trial(rec.name, prep, pos_n, stance, distance, float(phi))
+
+
+class FootReplayCore(FootZuptCore):
+    """N lanes of the replay environment stepping together."""
+
+    def __init__(
+        self,
+        config: FootReplayConfig,
+        num_envs: int,
+        env_name: str,
+        recordings: list[Recording] | None = None,
+    ) -> None:
+        """Trials from ``config.data_dir``, or the in-memory ``recordings``
+        (which may lack truth: then the error and reward are meaningless)."""
+        self.replay_config = config
+        self.recordings = recordings
+        if recordings is not None:
+            self.paths = [Path(r.name) for r in recordings]
+        elif config.data_dir is None:
+            raise ValueError(
+                f"{env_name}: data_dir is required: a directory of recordings with truth, "
+                "e.g. ../shared/data/pyshoe-vicon-dev"
+            )
+        else:
+            self.paths = find_recordings(config.data_dir)
+        if not self.paths:
+            raise ValueError(f"{config.data_dir}: no recordings (.mat, .csv) found")
+        self.trials: dict[int, Trial] = {}
+        rate, self.capacity = self._peek(0)
+        for i in range(1, len(self.paths)):
+            rec_rate, samples = self._peek(i)
+            if abs(rec_rate - rate) > 0.01 * rate:
+                raise ValueError(
+                    f"{env_name}: recordings at different rates: {self.paths[0].name} "
+                    f"{rate:.1f} Hz, {self.paths[i].name} {rec_rate:.1f} Hz"
+                )
+            self.capacity = max(self.capacity, samples)
+        foot = FootZuptConfig(
+            decision_interval_s=config.decision_interval_s,
+            rate_hz=rate,
+            filter=config.setup.filter,
+            tune_min_stance=config.tune_min_stance,
+            divergence_error_m=config.divergence_error_m,
+            divergence_error_fraction=config.divergence_error_fraction,
+        )
+        super().__init__(foot, num_envs, env_name)
+        n, cap = self.n, self.capacity + self.k + 1
+        self.omega = np.zeros((n, cap, 3))
+        self.f = np.zeros((n, cap, 3))
+        self.pos = np.zeros((n, cap + 1, 3))
+        self.true_stance = np.zeros((n, cap), dtype=bool)
+        self.distance = np.zeros((n, cap + 1))
+        self.lane_align = np.full(n, self.n_align, dtype=np.int64)
+        self.trial_index = np.zeros(n, dtype=np.int64)
+        self.trial_name = ["" for _ in range(n)]
+        self.heading_offset = np.zeros(n)
+
+    def _peek(self, i: int) -> tuple[float, int]:
+        """(rate, uniform samples) of recording i without the reference run."""
+        from pednav_env.io.uniform import grid_steps
+
+        nominal, steps = grid_steps(self._recording(i).time)
+        return 1.0 / nominal, int(steps.sum()) + 1
+
+    def _recording(self, i: int) -> Recording:
+        if self.recordings is not None:
+            return self.recordings[i]
+        return load_recording(self.paths[i], options=self.replay_config.load_options)
+
+    def _trial(self, i: int) -> Trial:
+        if i not in self.trials:
+            self.trials[i] = build_trial(
+                self._recording(i), self.replay_config, require_truth=self.recordings is None
+            )
+        return self.trials[i]
+
+    @property
+    def num_trials(self) -> int:
+        return len(self.paths)
+
+    def reset_lanes(self, lanes: NDArray[np.integer], rngs: list[np.random.Generator]) -> None:
+        """Start new episodes in ``lanes``: trial drawn from each lane's generator."""
+        lanes = np.asarray(lanes, dtype=np.int64)
+        g = self.config.filter.g
+        for lane, rng in zip(lanes, rngs, strict=True):
+            i = int(rng.integers(self.num_trials))
+            tr = self._trial(i)
+            p = tr.prepared
+            t = p.num_samples
+            self.omega[lane] = 0.0
+            self.f[lane] = 0.0
+            self.f[lane, :, 2] = g
+            self.omega[lane, :t] = p.omega_b
+            self.f[lane, :t] = p.f_b
+            self.pos[lane, : t + 1] = tr.pos_n
+            self.pos[lane, t + 1 :] = tr.pos_n[-1]
+            self.true_stance[lane] = True
+            self.true_stance[lane, :t] = tr.stance
+            self.distance[lane, : t + 1] = tr.distance_m
+            self.distance[lane, t + 1 :] = tr.distance_m[-1]
+            self.length[lane] = t
+            self.grade[lane] = "recorded"
+            self.trial_index[lane] = i
+            self.trial_name[lane] = tr.name
+            self.heading_offset[lane] = tr.heading_offset_rad
+            self.lane_align[lane] = p.n_align
+            mask = np.zeros(self.n, dtype=bool)
+            mask[lane] = True
+            na = p.n_align
+            self.engine.initialize(
+                self.f[lane : lane + 1, :na], mask, omega_align_b=self.omega[lane : lane + 1, :na]
+            )
+            self.cursor[lane] = na
+            self.nav_samples[lane] = max(t - na, 1)
+        self.action[lanes] = 0.0
+        self.clipped[lanes] = 0
+        self.stance_avg_s[lanes] = 0.0
+        self.stance_len[lanes] = 0
+        self.last_error[lanes] = 0.0
+        self._apply_action(lanes)
+        for lane in lanes:  # the reset features describe each lane's own alignment window
+            self.n_align = int(self.lane_align[lane])
+            self.obs[lane] = self._features(np.array([lane]), None)[0]

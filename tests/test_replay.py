@@ -1,0 +1,195 @@
+"""The ZUPT-UKF on recordings: mounting, still start, metrics, the runner on a
+real sample, shipped setups, and `pednav run`."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from agents.cli import main
+from pednav_env.constants import STANDARD_GRAVITY
+from pednav_env.io import Recording, load_recording
+from pednav_env.nav.mounting import axes_rotation, level_rotation, mounting_rotation
+from pednav_env.nav.static_start import initial_still_samples
+from pednav_env.replay.metrics import best_rotation, rotate_h, track_errors
+from pednav_env.replay.runner import prepare, run_prepared, run_recording
+from pednav_env.replay.setup import (
+    RealFilterSetup,
+    named_setup,
+    paper_setup,
+    real_fixed_setup,
+)
+from pednav_env.rotations import euler_to_dcm
+
+DATA = Path(__file__).parent / "data"
+XIO = DATA / "xio_short_walk_13.5-17s.csv"
+PYSHOE = DATA / "replay" / "pyshoe_2017-11-22-11-48-35_first7s.mat"
+
+
+# ------------------------------------------------------------------ mounting
+@pytest.mark.parametrize(
+    "f",
+    [(0.0, 0.0, 9.8), (-2.78, 0.30, -9.35), (0.0, 0.0, -9.8), (9.8, 0.0, 0.0), (-4.8, 2.4, 8.2)],
+)
+def test_level_rotation_turns_the_static_force_up(f):
+    C = level_rotation(np.array(f))
+    np.testing.assert_allclose(C @ C.T, np.eye(3), atol=1e-12)
+    assert np.linalg.det(C) == pytest.approx(1.0)
+    np.testing.assert_allclose(C @ np.array(f), [0, 0, np.linalg.norm(f)], atol=1e-9)
+
+
+def test_axes_rotation_and_its_errors():
+    np.testing.assert_array_equal(
+        axes_rotation("x,-y,-z") @ np.array([1.0, 2.0, 3.0]), [1.0, -2.0, -3.0]
+    )
+    np.testing.assert_array_equal(mounting_rotation("none"), np.eye(3))
+    with pytest.raises(ValueError, match="not a proper rotation"):
+        axes_rotation("x,y,-z")
+    with pytest.raises(ValueError, match="three signed axes"):
+        axes_rotation("x,y")
+    with pytest.raises(ValueError, match="not one of"):
+        axes_rotation("x,y,w")
+    with pytest.raises(ValueError, match="needs the static"):
+        mounting_rotation("auto")
+
+
+def test_any_mounting_gives_the_same_track():
+    """The same walk seen by an IMU mounted three ways: after the mounting
+    step the filter's horizontal track is the same up to a heading rotation."""
+    rec = load_recording(PYSHOE)
+    tracks = []
+    for euler in ((0.0, 0.0, 0.0), (0.7, 0.4, -2.5), (-2.0, 1.2, 0.3)):
+        C_sb = euler_to_dcm(np.array(euler))  # an arbitrary fixed rotation of the sensor
+        r = Recording(
+            rec.time, rec.omega_b @ C_sb.T, rec.f_b @ C_sb.T, rec.truth_pos, name=rec.name
+        )
+        run = run_recording(r, paper_setup())
+        tracks.append(run.pos[0, :, :2])
+    for tr in tracks[1:]:
+        phi = best_rotation(tracks[0], tr)
+        np.testing.assert_allclose(rotate_h(tr, phi), tracks[0], atol=0.02)
+
+
+# ------------------------------------------------------------------ still start
+def test_still_start_is_found_and_required():
+    rate = 200.0
+    t = np.arange(600) / rate
+    w = np.zeros((600, 3))
+    f = np.tile([0.0, 0.0, STANDARD_GRAVITY], (600, 1))
+    w[300:, 0] = 2.0
+    n = initial_still_samples(w, f, rate, max_s=5.0)
+    assert 285 <= n <= 300
+    assert initial_still_samples(w, f, rate, max_s=1.0) == 200
+    w[10:, 0] = 2.0
+    with pytest.raises(ValueError, match=r"must be still.*moves at sample"):
+        initial_still_samples(w, f, rate)
+    assert t.size == 600
+
+
+# ------------------------------------------------------------------ metrics
+def test_metrics_on_a_rotated_copy_of_the_truth():
+    rng = np.random.default_rng(0)
+    truth = np.cumsum(rng.normal(0, 0.05, (500, 3)), axis=0)
+    truth[:50] = truth[50]
+    est = truth - truth[50]
+    est[:, :2] = rotate_h(est[:, :2], 0.8)
+    m = track_errors(est, truth + 7.0, start=50)
+    assert m["armse_m"] < 1e-9 and m["final_error_m"] < 1e-9
+    assert m["heading_offset_rad"] == pytest.approx(0.8)
+    est[50:, 0] += 0.3 * np.sin(np.arange(450) / 30.0)  # an error after the start
+    m = track_errors(est, truth, start=50)
+    assert 0.05 < m["armse_m"] < 0.3
+    # PyShoe: sqrt(mean over the two axes) = |e|/√2, averaged over all 500 samples
+    assert m["armse_pyshoe_m"] == pytest.approx(m["armse_m"] / math.sqrt(2) * 450 / 500)
+
+
+# ------------------------------------------------------------------ the filter on real samples
+def test_paper_filter_on_the_pyshoe_sample_is_plausible():
+    rec = load_recording(PYSHOE)
+    prep = prepare(rec, paper_setup())
+    assert 150 <= prep.n_align <= 200  # still for about 1.2 s, window capped at 1 s
+    np.testing.assert_allclose(prep.f_b[: prep.n_align].mean(0)[:2], 0.0, atol=0.05)
+    run = run_prepared(prep)
+    m = track_errors(run.pos[0], prep.truth_pos, prep.n_align)
+    truth_path = np.sum(np.linalg.norm(np.diff(prep.truth_pos[:, :2], axis=0), axis=1))
+    assert truth_path > 3.0
+    assert not run.diverged[0] and run.stances[0] >= 5
+    assert m["armse_m"] < 1.0 and m["final_error_m"] < 1.5  # misses stances, stays bounded
+
+
+def test_real_fixed_setup_is_shipped_and_runs_on_the_sample():
+    setup = real_fixed_setup()
+    assert named_setup("real-fixed") == setup
+    assert RealFilterSetup.from_dict(setup.to_dict()) == setup
+    run = run_recording(load_recording(PYSHOE), setup)
+    m = track_errors(run.pos[0], run.prepared.truth_pos, run.start_sample)
+    assert m["armse_m"] < 0.25
+
+
+def test_schedule_equal_to_constant_knobs_gives_the_same_track():
+    rec = load_recording(PYSHOE)
+    prep = prepare(rec, paper_setup())
+    a = run_prepared(prep, knobs={"omega_max": [0.5], "delta_f_max": [1.0]})
+    b = run_prepared(prep, schedule={"omega_max": [[0.5]], "delta_f_max": [[1.0]]})
+    np.testing.assert_array_equal(a.pos, b.pos)
+    with pytest.raises(ValueError, match="unknown knob"):
+        run_prepared(prep, knobs={"omega": [1.0]})
+
+
+def test_setup_validation():
+    with pytest.raises(ValueError, match="gravity"):
+        RealFilterSetup(gravity="moon")
+    with pytest.raises(ValueError, match="proper rotation"):
+        RealFilterSetup(mounting="x,y,-z")
+    with pytest.raises(ValueError, match="unknown setup"):
+        named_setup("best")
+    s = replace(paper_setup(), gravity="static")
+    prep = prepare(load_recording(PYSHOE), s)
+    assert prep.g == pytest.approx(np.linalg.norm(prep.f_b[: prep.n_align], axis=1).mean())
+
+
+# ------------------------------------------------------------------ pednav run
+def test_pednav_run_json_keys_with_truth(capsys, tmp_path):
+    plot = tmp_path / "top.png"
+    assert main(["run", str(PYSHOE), "--json", "--plot", str(plot)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out) == {
+        "duration_s",
+        "rate_hz",
+        "distance_m",
+        "final_position_m",
+        "stances",
+        "armse_m",
+        "armse_pyshoe_m",
+        "final_error_m",
+    }
+    assert out["rate_hz"] == pytest.approx(200, rel=0.01) and len(out["final_position_m"]) == 3
+    assert plot.stat().st_size > 1000
+
+
+def test_pednav_run_json_keys_without_truth_and_text(capsys):
+    assert main(["run", str(XIO), "--format", "xio", "--policy", "real-fixed", "--json"]) == 0
+    captured = capsys.readouterr()
+    out = json.loads(captured.out)
+    assert set(out) == {
+        "duration_s",
+        "rate_hz",
+        "distance_m",
+        "final_position_m",
+        "stances",
+        "loop_closure_m",
+    }
+    assert "duplicate_rows_removed" in captured.err  # issues go to stderr
+    assert main(["run", str(XIO)]) == 0
+    assert "loop closure" in capsys.readouterr().out
+
+
+def test_pednav_run_errors_are_reported(capsys):
+    assert main(["run", str(XIO), "--policy", "nonsense"]) == 2
+    assert "unknown policy" in capsys.readouterr().err
+    assert main(["run", str(XIO), "--format", "pyshoe"]) == 2
