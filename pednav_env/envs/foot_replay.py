@@ -167,20 +167,12 @@ class FootZuptReplayVectorEnv(FootZuptVectorEnv):
             dtype=np.float32,
         )
         self.render_mode = None
-        self._lane_rngs: list[np.random.Generator] | None = None
 
-    def _trial_info(self, info: dict) -> dict:
+    def lane_info(self) -> dict[str, np.ndarray]:
+        info = super().lane_info()
         info["trial"] = np.array(self.core.trial_name, dtype=object)
         info["heading_offset"] = self.core.heading_offset.copy()
         return info
-
-    def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None):
-        obs, info = super().reset(seed=seed, options=options)
-        return obs, self._trial_info(info)
-
-    def step(self, actions):
-        obs, reward, terminated, truncated, info = super().step(actions)
-        return obs, reward, terminated, truncated, self._trial_info(info)
 
 
 __all__ = ["ENV_ID", "FootZuptReplayEnv", "FootZuptReplayVectorEnv"]

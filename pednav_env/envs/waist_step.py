@@ -8,9 +8,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from gymnasium.utils import seeding
-from gymnasium.vector import AutoresetMode, VectorEnv
 
+from pednav_env.envs.native_vector import NativeVectorEnv
 from pednav_env.envs.waist_core import (
     ACTION_DIM,
     ACTION_KNOBS,
@@ -267,11 +266,9 @@ class WaistStepEnv(gym.Env):
             self._figure = None
 
 
-class WaistStepVectorEnv(VectorEnv):
+class WaistStepVectorEnv(NativeVectorEnv):
     """Native vector version of :class:`WaistStepEnv` (see its docstring):
     one batched detector and filter for all ``num_envs`` walks, SAME_STEP autoreset."""
-
-    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
     def __init__(
         self,
@@ -302,45 +299,9 @@ class WaistStepVectorEnv(VectorEnv):
             dtype=np.float32,
         )
         self.render_mode = None
-        self._lane_rngs: list[np.random.Generator] | None = None
 
-    def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None):
-        if isinstance(seed, int | np.integer):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
-        elif seed is None or all(s is None for s in seed):
-            seed = None
-            seeds = [None] * self.num_envs
-        else:
-            seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"{ENV_ID}: {len(seeds)} seeds for {self.num_envs} envs")
-        if seed is not None or self._lane_rngs is None:
-            self._lane_rngs = [seeding.np_random(s)[0] for s in seeds]
-        self.core.reset_lanes(np.arange(self.num_envs), self._lane_rngs)
-        info = {"sensor_grade": np.array(self.core.grade, dtype=object)}
-        return self.core.obs.copy(), info
-
-    def step(self, actions):
-        if self._lane_rngs is None:
-            raise RuntimeError(f"{ENV_ID}: call reset() before step()")
-        obs, reward, terminated, truncated, info = self.core.step(actions)
-        info["sensor_grade"] = np.array(self.core.grade, dtype=object)
-        done = terminated | truncated
-        if done.any():
-            lanes = np.flatnonzero(done)
-            info["final_obs"] = np.full(self.num_envs, None, dtype=object)
-            info["final_info"] = np.full(self.num_envs, None, dtype=object)
-            for lane in lanes:
-                info["final_obs"][lane] = obs[lane].copy()
-                info["final_info"][lane] = {
-                    k: v[lane] for k, v in info.items() if k not in ("final_obs", "final_info")
-                }
-            info["_final_obs"] = done.copy()
-            info["_final_info"] = done.copy()
-            self.core.reset_lanes(lanes, [self._lane_rngs[i] for i in lanes])
-            obs = self.core.obs.copy()
-            info["sensor_grade"] = np.array(self.core.grade, dtype=object)
-        return obs, reward.astype(np.float64), terminated, truncated, info
+    def lane_info(self) -> dict[str, np.ndarray]:
+        return {"sensor_grade": np.array(self.core.grade, dtype=object)}
 
 
 # Re-exported for documentation tools.
