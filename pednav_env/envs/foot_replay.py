@@ -114,21 +114,14 @@ class FootZuptReplayEnv(FootZuptEnv):
         self.core = FootReplayCore(self.replay_config, 1, ENV_ID)
         self.config = self.core.config
         self.action_space, self.observation_space = _spaces(self.config, self.core)
-        self._track_true: list[np.ndarray] = []
-        self._track_est: list[np.ndarray] = []
         self._figure = None
 
-    def _info_reset(self) -> dict[str, Any]:
-        info = super()._info_reset()
-        info["trial"] = self.core.trial_name[0]
-        info["heading_offset"] = float(self.core.heading_offset[0])
-        return info
-
-    def step(self, action):
-        obs, reward, terminated, truncated, info = super().step(action)
-        info["trial"] = self.core.trial_name[0]
-        info["heading_offset"] = float(self.core.heading_offset[0])
-        return obs, reward, terminated, truncated, info
+    def lane_info(self) -> dict[str, Any]:
+        return {
+            **super().lane_info(),
+            "trial": self.core.trial_name[0],
+            "heading_offset": float(self.core.heading_offset[0]),
+        }
 
 
 class FootZuptReplayVectorEnv(FootZuptVectorEnv):

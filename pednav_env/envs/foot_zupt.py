@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
@@ -16,7 +15,7 @@ from pednav_env.envs.foot_core import (
     FootZuptConfig,
     FootZuptCore,
 )
-from pednav_env.envs.native_vector import NativeVectorEnv
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
 
 ENV_ID = "pednav/FootZupt-v0"
 
@@ -34,7 +33,7 @@ def _spaces(config: FootZuptConfig, core: FootZuptCore) -> tuple[spaces.Box, spa
     return action, obs
 
 
-class FootZuptEnv(gym.Env):
+class FootZuptEnv(NativeScalarEnv):
     """
     ## Description
     A walker with an IMU on the foot walks a route; a zero-velocity-update
@@ -148,7 +147,8 @@ class FootZuptEnv(gym.Env):
     - v0: initial version.
     """
 
-    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 4}
+    track_dim = 3
+    estimate_label = "ZUPT-UKF"
 
     def __init__(
         self,
@@ -166,86 +166,13 @@ class FootZuptEnv(gym.Env):
             rate_hz=rate_hz,
             tune_min_stance=tune_min_stance,
         )
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"{ENV_ID}: render_mode must be one of "
-                f"{self.metadata['render_modes']}, got {render_mode!r}"
-            )
         self.render_mode = render_mode
         self.core = FootZuptCore(self.config, 1, ENV_ID)
+        self.check_render_mode(render_mode)
         self.action_space, self.observation_space = _spaces(self.config, self.core)
-        self._track_true: list[np.ndarray] = []
-        self._track_est: list[np.ndarray] = []
-        self._figure = None
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
-        super().reset(seed=seed)
-        self.core.reset_lanes(np.array([0]), [self.np_random])
-        self._track_true = [np.zeros(3)]
-        self._track_est = [np.zeros(3)]
-        return self.core.obs[0].copy(), self._info_reset()
-
-    def _info_reset(self) -> dict[str, Any]:
-        return {
-            "imu_grade": self.core.grade[0],
-            "distance": 0.0,
-            "error": 0.0,
-            "knobs": {k: float(v[0]) for k, v in self.core.knob_values().items()},
-        }
-
-    def step(self, action):
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != self.action_space.shape:
-            raise ValueError(
-                f"{self.core.env_name}: action must have shape {self.action_space.shape}, "
-                f"got {a.shape}"
-            )
-        obs, reward, terminated, truncated, info = self.core.step(a[None, :])
-        out = {k: (v[0].copy() if np.ndim(v) > 1 else v[0].item()) for k, v in info.items()}
-        out["imu_grade"] = self.core.grade[0]
-        out["knobs"] = {k: float(v[0]) for k, v in self.core.knob_values().items()}
-        if self.render_mode is not None:  # the track is kept only for rendering
-            self._track_true.append(out["pos_true"])
-            self._track_est.append(out["pos_est"])
-        if self.render_mode == "human":
-            self.render()
-        return obs[0], float(reward[0]), bool(terminated[0]), bool(truncated[0]), out
-
-    def render(self):
-        if self.render_mode is None:
-            gym.logger.warn(f"{self.core.env_name}: render() called without a render_mode")
-            return None
-        import matplotlib
-
-        if self.render_mode == "rgb_array":
-            matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        if self._figure is None:
-            self._figure = plt.figure(figsize=(5, 5), dpi=80)
-        fig = self._figure
-        fig.clf()
-        ax = fig.add_subplot(111)
-        t = np.array(self._track_true)
-        e = np.array(self._track_est)
-        ax.plot(t[:, 0], t[:, 1], "k-", label="truth")
-        ax.plot(e[:, 0], e[:, 1], "r--", label="ZUPT-UKF")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("east (m)")
-        ax.set_ylabel("north (m)")
-        ax.legend(loc="upper right")
-        fig.canvas.draw()
-        if self.render_mode == "human":
-            plt.pause(0.001)
-            return None
-        return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
-
-    def close(self):
-        if self._figure is not None:
-            import matplotlib.pyplot as plt
-
-            plt.close(self._figure)
-            self._figure = None
+    def lane_info(self) -> dict[str, Any]:
+        return {"imu_grade": self.core.grade[0]}
 
 
 class FootZuptVectorEnv(NativeVectorEnv):

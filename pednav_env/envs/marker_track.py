@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
@@ -15,7 +14,7 @@ from pednav_env.envs.marker_core import (
     MarkerTrackConfig,
     MarkerTrackCore,
 )
-from pednav_env.envs.native_vector import NativeVectorEnv
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
 
 ENV_ID = "pednav/MarkerTrack-v0"
 #: Seconds of track shown by :meth:`MarkerTrackEnv.render`.
@@ -35,7 +34,7 @@ def _spaces(config: MarkerTrackConfig, core: MarkerTrackCore) -> tuple[spaces.Bo
     return action, obs
 
 
-class MarkerTrackEnv(gym.Env):
+class MarkerTrackEnv(NativeScalarEnv):
     """
     ## Description
     A walker wears two UWB tags on one leg, on the heel and on the knee; the
@@ -162,7 +161,8 @@ class MarkerTrackEnv(gym.Env):
     - v0: initial version.
     """
 
-    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 4}
+    figure_size = (6.0, 4.0)
+    track_dim = 4
 
     def __init__(
         self,
@@ -175,68 +175,26 @@ class MarkerTrackEnv(gym.Env):
         self.config = _make_config(
             config, scenario=scenario, decision_interval_s=decision_interval_s, rate_hz=rate_hz
         )
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"{ENV_ID}: render_mode must be one of "
-                f"{self.metadata['render_modes']}, got {render_mode!r}"
-            )
         self.render_mode = render_mode
         self.core = MarkerTrackCore(self.config, 1, ENV_ID)
+        self.check_render_mode(render_mode)
         self.action_space, self.observation_space = _spaces(self.config, self.core)
-        self._track_true: list[np.ndarray] = []
-        self._track_est: list[np.ndarray] = []
-        self._figure = None
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
-        super().reset(seed=seed)
-        self.core.reset_lanes(np.array([0]), [self.np_random])
-        self._track_true, self._track_est = [], []
-        return self.core.obs[0].copy(), self._info_reset()
+    def lane_info(self) -> dict[str, Any]:
+        return {"uwb_condition": self.core.condition[0]}
 
-    def _info_reset(self) -> dict[str, Any]:
-        return {
-            "uwb_condition": self.core.condition[0],
-            "distance": 0.0,
-            "error": 0.0,
-            "knobs": {k: float(v[0]) for k, v in self.core.knob_values().items()},
-        }
-
-    def step(self, action):
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != self.action_space.shape:
-            raise ValueError(
-                f"{ENV_ID}: action must have shape {self.action_space.shape}, got {a.shape}"
-            )
-        obs, reward, terminated, truncated, info = self.core.step(a[None, :])
-        out = {k: (v[0].copy() if np.ndim(v) > 1 else v[0].item()) for k, v in info.items()}
-        out["uwb_condition"] = self.core.condition[0]
-        out["knobs"] = {k: float(v[0]) for k, v in self.core.knob_values().items()}
+    def record_track(self, info: dict[str, Any]) -> None:
+        """Marker tracks of the interval's samples, the last RENDER_WINDOW_S seconds."""
         active = self.core.interval_active[:, 0]
         self._track_true.extend(self.core.interval_truth[active, :, 0])
         self._track_est.extend(self.core.interval_est[active, :, 0])
         keep = int(RENDER_WINDOW_S * self.config.rate_hz)
         del self._track_true[:-keep], self._track_est[:-keep]
-        if self.render_mode == "human":
-            self.render()
-        return obs[0], float(reward[0]), bool(terminated[0]), bool(truncated[0]), out
 
-    def render(self):
-        if self.render_mode is None:
-            gym.logger.warn(f"{ENV_ID}: render() called without a render_mode")
-            return None
-        import matplotlib
-
-        if self.render_mode == "rgb_array":
-            matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        if self._figure is None:
-            self._figure = plt.figure(figsize=(6, 4), dpi=80)
-        fig = self._figure
-        fig.clf()
-        ax = fig.add_subplot(111)
-        t = np.array(self._track_true).reshape(-1, 4)
-        e = np.array(self._track_est).reshape(-1, 4)
+    def draw(self, ax: Any) -> None:
+        """Heel and knee, truth vs EKF, in the sagittal plane."""
+        t = np.array(self._track_true[1:]).reshape(-1, 4)
+        e = np.array(self._track_est[1:]).reshape(-1, 4)
         for col, name, colour in ((0, "heel", "tab:blue"), (2, "knee", "tab:orange")):
             ax.plot(t[:, col], t[:, col + 1], "-", color=colour, label=f"{name} truth")
             ax.plot(e[:, col], e[:, col + 1], "--", color=colour, label=f"{name} EKF")
@@ -244,18 +202,6 @@ class MarkerTrackEnv(gym.Env):
         ax.set_ylabel("z up (m)")
         ax.set_title(f"last {RENDER_WINDOW_S:g} s")
         ax.legend(loc="upper left", fontsize="small")
-        fig.canvas.draw()
-        if self.render_mode == "human":
-            plt.pause(0.001)
-            return None
-        return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
-
-    def close(self):
-        if self._figure is not None:
-            import matplotlib.pyplot as plt
-
-            plt.close(self._figure)
-            self._figure = None
 
 
 class MarkerTrackVectorEnv(NativeVectorEnv):

@@ -5,11 +5,10 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from pednav_env.envs.native_vector import NativeVectorEnv
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
 from pednav_env.envs.waist_core import (
     ACTION_DIM,
     ACTION_KNOBS,
@@ -35,7 +34,7 @@ def _spaces(core: WaistStepCore) -> tuple[spaces.Box, spaces.Box]:
     return action, obs
 
 
-class WaistStepEnv(gym.Env):
+class WaistStepEnv(NativeScalarEnv):
     """
     ## Description
     A walker with an IMU on the belt walks a route of inverted-pendulum steps
@@ -168,7 +167,7 @@ class WaistStepEnv(gym.Env):
     - v0: initial version.
     """
 
-    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 4}
+    estimate_label = "step-fusion KF"
 
     def __init__(
         self,
@@ -186,84 +185,13 @@ class WaistStepEnv(gym.Env):
             rate_hz=rate_hz,
             paper_steps=paper_steps,
         )
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"{ENV_ID}: render_mode must be one of "
-                f"{self.metadata['render_modes']}, got {render_mode!r}"
-            )
         self.render_mode = render_mode
         self.core = WaistStepCore(self.config, 1, ENV_ID)
+        self.check_render_mode(render_mode)
         self.action_space, self.observation_space = _spaces(self.core)
-        self._track_true: list[np.ndarray] = []
-        self._track_est: list[np.ndarray] = []
-        self._figure = None
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
-        super().reset(seed=seed)
-        self.core.reset_lanes(np.array([0]), [self.np_random])
-        self._track_true = [np.zeros(2)]
-        self._track_est = [np.zeros(2)]
-        return self.core.obs[0].copy(), self._info_reset()
-
-    def _info_reset(self) -> dict[str, Any]:
-        return {
-            "sensor_grade": self.core.grade[0],
-            "distance": 0.0,
-            "error": 0.0,
-            "knobs": {k: float(v[0]) for k, v in self.core.knob_values().items()},
-        }
-
-    def step(self, action):
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != self.action_space.shape:
-            raise ValueError(
-                f"{ENV_ID}: action must have shape {self.action_space.shape}, got {a.shape}"
-            )
-        obs, reward, terminated, truncated, info = self.core.step(a[None, :])
-        out = {k: (v[0].copy() if np.ndim(v) > 1 else v[0].item()) for k, v in info.items()}
-        out["sensor_grade"] = self.core.grade[0]
-        out["knobs"] = {k: float(v[0]) for k, v in self.core.knob_values().items()}
-        self._track_true.append(out["pos_true"])
-        self._track_est.append(out["pos_est"])
-        if self.render_mode == "human":
-            self.render()
-        return obs[0], float(reward[0]), bool(terminated[0]), bool(truncated[0]), out
-
-    def render(self):
-        if self.render_mode is None:
-            gym.logger.warn(f"{ENV_ID}: render() called without a render_mode")
-            return None
-        import matplotlib
-
-        if self.render_mode == "rgb_array":
-            matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        if self._figure is None:
-            self._figure = plt.figure(figsize=(5, 5), dpi=80)
-        fig = self._figure
-        fig.clf()
-        ax = fig.add_subplot(111)
-        t = np.array(self._track_true)
-        e = np.array(self._track_est)
-        ax.plot(t[:, 0], t[:, 1], "k-", label="truth")
-        ax.plot(e[:, 0], e[:, 1], "r--", label="step-fusion KF")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("east (m)")
-        ax.set_ylabel("north (m)")
-        ax.legend(loc="upper right")
-        fig.canvas.draw()
-        if self.render_mode == "human":
-            plt.pause(0.001)
-            return None
-        return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
-
-    def close(self):
-        if self._figure is not None:
-            import matplotlib.pyplot as plt
-
-            plt.close(self._figure)
-            self._figure = None
+    def lane_info(self) -> dict[str, Any]:
+        return {"sensor_grade": self.core.grade[0]}
 
 
 class WaistStepVectorEnv(NativeVectorEnv):
