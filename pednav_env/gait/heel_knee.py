@@ -423,13 +423,16 @@ def _gait_factors(
     lo_s, hi_s = config.stride_factor_range
     old_c = old_s = 1.0
     ramp_time = config.gait_transition_time
-    for t_change in times:
+    # Change i rules the samples from its time up to the next change (t is
+    # ascending), so each change writes only its own segment.
+    starts = np.searchsorted(t, times, side="left").tolist() + [t.size]
+    for i, t_change in enumerate(times):
         new_c = rng.uniform(lo_c, hi_c)
         new_s = rng.uniform(lo_s, hi_s)
-        w = np.clip((t - t_change) / ramp_time, 0.0, 1.0)
-        after = t >= t_change
-        f_c = np.where(after, old_c + (new_c - old_c) * w, f_c)
-        f_s = np.where(after, old_s + (new_s - old_s) * w, f_s)
+        seg = slice(starts[i], starts[i + 1])
+        w = np.clip((t[seg] - t_change) / ramp_time, 0.0, 1.0)
+        f_c[seg] = old_c + (new_c - old_c) * w
+        f_s[seg] = old_s + (new_s - old_s) * w
         old_c, old_s = new_c, new_s
     return f_c, f_s
 

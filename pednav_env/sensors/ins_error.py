@@ -189,16 +189,27 @@ def simulate_schuler_errors(
     bias = np.array([c.accel_bias for c in cfgs])[:, None, None]
     sgn = CHANNEL_SIGN[None, None, :]
     # Φ per walker, step and channel, written out (g and R may differ per walker).
+    # ε is a running sum; δV and β are coupled, so they recur step by step on
+    # Python floats (the same IEEE operations, in the same order, as arrays).
     Tc = T[:, :, None]
+    a = (sgn * g) * Tc  # δV(k) = δV − a β + b + w_a
+    b = np.broadcast_to(bias * Tc, a.shape)
+    c = (sgn * Tc) / R  # β(k) = c δV + β + T ε
+    eps = np.cumsum(np.concatenate((x0[:, None, :, 2], w[:, :, :, 2]), axis=1), axis=1)
+    d = Tc * eps[:, :k]
     x = np.empty((n, k + 1, 2, 3))
-    x[:, 0] = x0
-    for j in range(k):
-        prev = x[:, j]
-        dv, beta, eps = prev[..., 0], prev[..., 1], prev[..., 2]
-        Tj = Tc[:, j]
-        x[:, j + 1, :, 0] = dv - sgn[0] * g[:, 0] * Tj * beta + bias[:, 0] * Tj + w[:, j, :, 0]
-        x[:, j + 1, :, 1] = sgn[0] * Tj / R[:, 0] * dv + beta + Tj * eps
-        x[:, j + 1, :, 2] = eps + w[:, j, :, 2]
+    x[..., 2] = eps
+    for i in range(n):
+        for ch in range(2):
+            dv, beta = float(x0[i, ch, 0]), float(x0[i, ch, 1])
+            dvs, betas = [dv], [beta]
+            cols = (a[i, :, ch], b[i, :, ch], w[i, :, ch, 0], c[i, :, ch], d[i, :, ch])
+            for aj, bj, wj, cj, dj in zip(*(col.tolist() for col in cols), strict=True):
+                dv, beta = dv - aj * beta + bj + wj, cj * dv + beta + dj
+                dvs.append(dv)
+                betas.append(beta)
+            x[i, :, ch, 0] = dvs
+            x[i, :, ch, 1] = betas
     return x
 
 
