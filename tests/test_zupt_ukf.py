@@ -105,6 +105,9 @@ def test_garbage_input_diverges_cleanly():
         run = eng.run(omega, f)
     assert run.diverged.tolist() == [False, True]
     assert np.all(np.isfinite(run.x))
+    # a diverged walker is frozen where it was declared diverged, not integrated further
+    assert np.all(run.x[1, 110:] == run.x[1, -1])
+    assert np.abs(run.x[1, :, :3]).max() < 1.0
 
 
 def test_merwe_weights_follow_the_paper():

@@ -409,9 +409,15 @@ class ZuptUkf:
             idx = np.flatnonzero(event)
             kinds = np.where(start[idx], "start", np.where(end[idx], "end", "stance"))
             self._update(idx, kinds)
-        self.sig_q, self.sig_v, self.sig_p = advance_sigma(
+        q, v, p = advance_sigma(
             self.sig_q, self.sig_v, self.sig_p, dqT, f_mid, self.dt, self.config.g
         )
+        if self.diverged.any():  # diverged walkers stay frozen where they were declared so
+            frozen = self.diverged[:, None, None]
+            q = np.where(frozen, self.sig_q, q)
+            v = np.where(frozen, self.sig_v, v)
+            p = np.where(frozen, self.sig_p, p)
+        self.sig_q, self.sig_v, self.sig_p = q, v, p
         self.elapsed_s += self.dt
         self.time_since_update_s += self.dt
         self.sample += 1
