@@ -1,7 +1,7 @@
 """Paired comparison of a learned tuner with the tuned-fixed action, and what it does.
 
-.venv/bin/python benchmarks/paired_vs_tuned.py [RUN_DIR_OR_NAME] [--episodes N] [--seed S]
-(default: the shipped FootZupt-v0 tuner, 100 episodes from seed 5000).
+.venv/bin/python benchmarks/paired_vs_tuned.py [RUN_DIR_OR_NAME] [--env ENV_ID] [--episodes N]
+[--seed S] (default: the shipped tuner of pednav/FootZupt-v0, 100 episodes from seed 5000).
 """
 
 import argparse
@@ -12,14 +12,14 @@ from scipy import stats
 
 from agents.evaluate import load_policy, run_episodes
 
-ENV_ID = "pednav/FootZupt-v0"
-
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("policy", nargs="?", default="pretrained")
+    ap.add_argument("--env", default="pednav/FootZupt-v0")
     ap.add_argument("--episodes", type=int, default=100)
     ap.add_argument("--seed", type=int, default=5000)
     args = ap.parse_args()
+    ENV_ID = args.env
     space = gym.make(ENV_ID).action_space
     tuned_pol = load_policy("tuned", space, ENV_ID)
     learned_pol = load_policy(args.policy, space, ENV_ID)
