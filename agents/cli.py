@@ -43,7 +43,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from agents.evaluate import evaluate, format_table
 
     env_kwargs = {"scenario": args.scenario} if args.scenario else {}
-    result = evaluate(args.env_id, args.policy, args.episodes, args.seed, env_kwargs)
+    result = evaluate(args.env_id, args.policy, args.episodes, args.seed, env_kwargs, args.plot)
     print(json.dumps(result) if args.json else format_table(result))
     return 0
 
@@ -142,6 +142,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ev.add_argument("--scenario", default=None, help="env scenario, e.g. random or paper")
     ev.add_argument("--json", action="store_true", help="print one JSON object (DESIGN.md)")
+    ev.add_argument(
+        "--plot",
+        metavar="DIR",
+        default=None,
+        help="save error-over-time and per-episode figures to DIR",
+    )
     ev.set_defaults(func=_cmd_evaluate)
 
     tr = sub.add_parser("train", help="train a filter tuner with Stable-Baselines3")

@@ -49,6 +49,8 @@ class EpisodeResult:
     final_error: float  # m
     distance: float  # m walked
     diverged: bool
+    #: horizontal error (m) at the end of each decision interval
+    error_trace: tuple[float, ...] = ()
 
     @property
     def final_error_pct(self) -> float:
@@ -102,17 +104,24 @@ def run_episodes(
         vec = NativeVecEnv(venv)
         vec.seed(seed + start)
         lane: dict[int, EpisodeResult] = {}
+        traces: dict[int, list[float]] = {i: [] for i in range(n)}
 
-        def record(local: dict[str, Any], _: dict[str, Any], lane=lane, base=seed + start) -> None:
+        def record(
+            local: dict[str, Any], _: dict[str, Any], lane=lane, traces=traces, base=seed + start
+        ) -> None:
             i = local["i"]
-            if local["done"] and i not in lane:
-                info = local["info"]
+            if i in lane:
+                return
+            info = local["info"]
+            traces[i].append(float(info["error"]))
+            if local["done"]:
                 lane[i] = EpisodeResult(
                     seed=base + i,
                     mean_error=-float(local["current_rewards"][i]),
                     final_error=float(info["error"]),
                     distance=float(info["distance"]),
                     diverged=not bool(info["TimeLimit.truncated"]),
+                    error_trace=tuple(traces[i]),
                 )
 
         evaluate_policy(
@@ -158,8 +167,12 @@ def evaluate(
     episodes: int,
     seed: int,
     env_kwargs: dict[str, Any] | None = None,
+    plot_dir: str | Path | None = None,
 ) -> dict[str, Any]:
-    """Evaluate every named policy on the same episodes; returns the JSON object."""
+    """Evaluate every named policy on the same episodes; returns the JSON object.
+
+    With ``plot_dir``, also saves ``error_over_time.png`` and ``per_episode.png``.
+    """
     if not policy_names:
         raise ValueError("no policy named")
     check_evaluation_seeds(seed, episodes)
@@ -173,6 +186,8 @@ def evaluate(
         name: run_episodes(env_id, pol, episodes, seed, env_kwargs)
         for name, pol in policies.items()
     }
+    if plot_dir is not None:
+        write_plots(env_id, outcomes, Path(plot_dir))
     return {
         "env": env_id,
         "episodes": episodes,
@@ -202,3 +217,53 @@ def format_table(result: dict[str, Any]) -> str:
             f"{p['vs_paper']['mean_diff']:>+10.3f} {'—' if pv is None else f'{pv:.2g}':>8}"
         )
     return "\n".join(lines)
+
+
+def write_plots(env_id: str, outcomes: dict[str, list[EpisodeResult]], out: Path) -> list[Path]:
+    """Error over time (mean and quartiles over episodes, per policy) and a per-episode
+    comparison against the paper policy."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for name, res in outcomes.items():
+        longest = max(len(r.error_trace) for r in res)
+        grid = np.full((len(res), longest), np.nan)
+        for j, r in enumerate(res):
+            grid[j, : len(r.error_trace)] = r.error_trace
+        step = np.arange(1, longest + 1)
+        line = ax.plot(step, np.nanmedian(grid, axis=0), label=name)[0]
+        q1, q3 = np.nanpercentile(grid, [25, 75], axis=0)
+        ax.fill_between(step, q1, q3, color=line.get_color(), alpha=0.15)
+    ax.set_xlabel("decision step")
+    ax.set_ylabel("error (m): median, 25–75 % band")
+    ax.set_title(f"{env_id}: error over time ({len(next(iter(outcomes.values())))} episodes)")
+    ax.set_yscale("log")
+    ax.legend()
+    fig.tight_layout()
+    files = [out / "error_over_time.png"]
+    fig.savefig(files[0], dpi=110)
+    plt.close(fig)
+
+    paper = np.array([r.mean_error for r in outcomes["paper"]])
+    fig, ax = plt.subplots(figsize=(5.5, 5.5))
+    for name, res in outcomes.items():
+        if name == "paper":
+            continue
+        ax.scatter(paper, [r.mean_error for r in res], s=12, label=name, alpha=0.7)
+    lim = [min(paper.min(), 1e-3), paper.max() * 1.1]
+    ax.plot(lim, lim, "k:", lw=1, label="equal to paper")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("paper policy: time-averaged error (m)")
+    ax.set_ylabel("policy: time-averaged error (m)")
+    ax.set_title(f"{env_id}: per episode (below the line = better)")
+    ax.legend(fontsize="small")
+    fig.tight_layout()
+    files.append(out / "per_episode.png")
+    fig.savefig(files[1], dpi=110)
+    plt.close(fig)
+    return files

@@ -82,6 +82,32 @@ def test_resume_continues_from_the_checkpoint(run_dir):
     assert json.loads((out / "meta.json").read_text())["timesteps"] >= 768
 
 
+def test_sac_trains_and_saves(tmp_path):
+    hp = {
+        "learning_starts": 64,
+        "buffer_size": 2000,
+        "batch_size": 32,
+        "train_freq": 1,
+        "gradient_steps": 1,
+        "env_kwargs": {"config": SHORT},
+        "policy_kwargs": {"net_arch": [16]},
+        "checkpoint_steps": 10_000,
+    }
+    out = train(
+        ENV_ID,
+        "sac",
+        timesteps=256,
+        seed=1,
+        n_envs=2,
+        run_dir=tmp_path,
+        progress_bar=False,
+        hyperparams=hp,
+    )
+    assert json.loads((out / "meta.json").read_text())["algo"] == "sac"
+    a, _ = load_run(out).predict(np.zeros((3, 20), np.float32))
+    assert a.shape == (3, 4) and np.all(np.abs(a) <= 1)
+
+
 def test_seed_split_is_enforced():
     check_evaluation_seeds(5000, 100)
     with pytest.raises(ValueError, match="reserved for training"):

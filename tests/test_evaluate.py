@@ -82,7 +82,7 @@ def test_evaluate_json_has_the_contract_keys_and_paired_stats(tmp_path):
     assert 0.0 <= learned["vs_paper"]["p_value"] <= 1.0
 
 
-def test_cli_evaluate_and_errors(capsys):
+def test_cli_evaluate_and_errors(capsys, tmp_path):
     assert (
         main(
             [
@@ -90,15 +90,20 @@ def test_cli_evaluate_and_errors(capsys):
                 ENV_ID,
                 "--policy",
                 "paper",
+                "adaptive",
                 "--episodes",
                 "2",
                 "--scenario",
                 "paper",
                 "--json",
+                "--plot",
+                str(tmp_path),
             ]
         )
         == 0
     )
+    for name in ("error_over_time.png", "per_episode.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
     out = json.loads(capsys.readouterr().out)
     assert out["policies"][0]["name"] == "paper" and out["episodes"] == 2
     assert main(["evaluate", ENV_ID, "--policy", "oracle", "--episodes", "1"]) == 2
