@@ -9,6 +9,11 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
+from env_contract import (
+    assert_lanes_equal_scalar_envs,
+    assert_same_seed_same_episode,
+    rollout,
+)
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
@@ -31,20 +36,6 @@ SHORT = WaistStepConfig(randomization=WaistRandomization(duration_s=(12.0, 20.0)
 PAPER_SHORT = WaistStepConfig(scenario="paper", paper_steps=60)
 
 
-def rollout(env, seed, actions=None, max_steps=10_000):
-    obs, _ = env.reset(seed=seed)
-    out = [obs]
-    rewards = []
-    for t in range(max_steps):
-        a = np.zeros(env.action_space.shape, np.float32) if actions is None else actions(t)
-        obs, r, term, trunc, info = env.step(a)
-        out.append(obs)
-        rewards.append(r)
-        if term or trunc:
-            break
-    return np.array(out), np.array(rewards), info
-
-
 def test_gymnasium_and_sb3_checkers_pass_without_warnings():
     env = gym.make(ENV_ID, config=SHORT)
     with warnings.catch_warnings():
@@ -60,47 +51,11 @@ def test_docstring_example_runs():
 
 def test_same_seed_same_episode():
     env = gym.make(ENV_ID, config=SHORT)
-    a = rollout(env, 3)
-    b = rollout(env, 3)
-    c = rollout(env, 4)
-    np.testing.assert_array_equal(a[0], b[0])
-    np.testing.assert_array_equal(a[1], b[1])
-    assert a[0].shape != c[0].shape or not np.array_equal(a[0], c[0])
+    assert_same_seed_same_episode(env)
 
 
 def test_vector_lanes_equal_scalar_envs_bit_for_bit():
-    n, seed = 3, 20
-    venv = gym.make_vec(ENV_ID, num_envs=n, vectorization_mode="vector_entry_point", config=SHORT)
-    assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
-    obs, _ = venv.reset(seed=seed)
-    lane_obs = [[obs[i]] for i in range(n)]
-    lane_rew = [[] for _ in range(n)]
-    episodes_done = np.zeros(n, dtype=int)
-    rng = np.random.default_rng(0)
-    actions = []
-    while episodes_done.min() < 2:  # two episodes per lane: covers autoreset
-        a = rng.uniform(-1, 1, (n, 5)).astype(np.float32)
-        actions.append(a)
-        obs, r, term, trunc, info = venv.step(a)
-        for i in range(n):
-            lane_rew[i].append(r[i])
-            if term[i] or trunc[i]:
-                lane_obs[i].append(info["final_obs"][i])
-                episodes_done[i] += 1
-            lane_obs[i].append(obs[i])
-    for i in range(n):
-        env = gym.make(ENV_ID, config=SHORT).unwrapped
-        obs_s, _ = env.reset(seed=seed + i)
-        got_obs, got_rew = [obs_s], []
-        for a in actions:
-            o, r, term, trunc, _ = env.step(a[i])
-            got_obs.append(o)
-            got_rew.append(r)
-            if term or trunc:
-                o, _ = env.reset()  # next episode from the same generator
-                got_obs.append(o)
-        np.testing.assert_array_equal(np.array(got_obs), np.array(lane_obs[i]))
-        np.testing.assert_array_equal(np.array(got_rew), np.array(lane_rew[i]))
+    assert_lanes_equal_scalar_envs(ENV_ID, {"config": SHORT})
 
 
 def test_wide_batch_lanes_equal_scalar_envs():
