@@ -21,7 +21,9 @@ Array = NDArray[np.float64]
 
 def wrap_angle(angle: ArrayLike) -> Array:
     """Wrap angles (rad) into [−π, π)."""
-    return (np.asarray(angle, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
+    a = np.asarray(angle, dtype=float)
+    # a − 2π ⌊(a + π)/2π⌋: the same as (a + π) mod 2π − π, several times faster than fmod
+    return a - (2.0 * np.pi) * np.floor((a + np.pi) * (0.5 / np.pi))
 
 
 def euler_to_quat(euler: ArrayLike) -> Array:

@@ -49,7 +49,8 @@ def test_return_is_minus_the_time_averaged_error():
     core = env.core
     t = int(core.length[0])
     engine = ZuptUkf(core.config.filter, core.config.rate_hz, 1)
-    run = engine.run(core.omega[:, :t], core.f[:, :t])
+    # the same blocks as the env's decision intervals (identical rounding)
+    run = engine.run(core.omega[:, :t], core.f[:, :t], block_samples=core.k)
     k0, k = run.start_sample, core.k
     ends = list(range(k0 + k, t, k)) + [t]
     weights = np.diff([k0, *ends]) / (t - k0)

@@ -290,43 +290,20 @@ class FootZuptCore:
         self.action = np.clip(a, -1.0, 1.0)
         self._apply_action(self.lanes)
         e = self.engine
-        n, k = self.n, self.k
+        k = self.k
         remaining = self.length - self.cursor
         used = np.clip(remaining, 0, k)
         idx = self.cursor[:, None] + np.arange(k)[None, :]
         omega = self.omega[self.lanes[:, None], idx]  # (N, K, 3)
         f = self.f[self.lanes[:, None], idx]
         updates0, rejected0 = e.updates.copy(), e.rejected.copy()
-        nis_sum = np.zeros(n)
-        detected = np.zeros((n, k), dtype=bool)
-        starts = np.zeros(n, dtype=np.int64)
-        true_starts = np.zeros(n, dtype=np.int64)
-        est_end = e.mean_position()  # kept for lanes with no samples left
-        omega_c, dqT, f_mid = e.increments(omega, f)  # the whole interval at once
-        for j in range(k):
-            upd_before = e.updates.copy()
-            start, end = e.step(
-                omega[:, j], f[:, j], increments=(omega_c[:, j], dqT[:, j], f_mid[:, j])
-            )
-            newly = e.updates > upd_before
-            nis_sum += np.where(newly, np.log1p(e.last_nis), 0.0)
-            detected[:, j] = e.detector.in_stance
-            starts += start
-            true_starts += start & self.true_stance[self.lanes, idx[:, j]]
-            # durations of completed detected stances (moving average)
-            self.stance_len = np.where(e.detector.in_stance, self.stance_len + 1, self.stance_len)
-            done_stance = end & (self.stance_len > 0)
-            if done_stance.any():
-                dur = self.stance_len * self.dt
-                self.stance_avg_s = np.where(
-                    done_stance,
-                    np.where(self.stance_avg_s > 0, 0.8 * self.stance_avg_s + 0.2 * dur, dur),
-                    self.stance_avg_s,
-                )
-                self.stance_len = np.where(done_stance, 0, self.stance_len)
-            ends_here = used == j + 1
-            if ends_here.any():
-                est_end[ends_here] = e.mean_position()[ends_here]
+        res = e.advance(omega, f, valid=used)  # the whole interval in one call
+        in_walk = np.arange(k)[None, :] < used[:, None]
+        start, end = res.start & in_walk, res.end & in_walk
+        starts = start.sum(axis=1)
+        true_starts = (start & self.true_stance[self.lanes[:, None], idx]).sum(axis=1)
+        self._stance_durations(res.stance, end)
+        est_end = res.position
         self.cursor += used
         truth = self.pos[self.lanes, self.cursor]
         err = np.linalg.norm(est_end[:, :2] - truth[:, :2], axis=1)
@@ -345,9 +322,11 @@ class FootZuptCore:
             "omega": omega,
             "f": f,
             "used": used,
-            "detected": detected,
+            "detected": res.stance,
             "starts": starts,
-            "nis_mean": np.where(new_updates > 0, nis_sum / np.maximum(new_updates, 1), 0.0),
+            "nis_mean": np.where(
+                res.accepted > 0, res.nis_log_sum / np.maximum(res.accepted, 1), 0.0
+            ),
         }
         self.obs = self._features(self.lanes, interval)
         info = {
@@ -366,6 +345,25 @@ class FootZuptCore:
             "reward_error": -err * weight,
         }
         return self.obs.copy(), reward, terminated, truncated, info
+
+    def _stance_durations(self, stance: NDArray[np.bool_], end: NDArray[np.bool_]) -> None:
+        """Moving average (weight 0.2) of the durations of detected stances that
+        ended in the interval, in order; ``stance_len`` carries an open stance."""
+        k = stance.shape[1]
+        j = np.arange(k)
+        last_out = np.maximum.accumulate(np.where(stance, -1, j[None, :]), axis=1)
+        run = np.where(last_out >= 0, j[None, :] - last_out, self.stance_len[:, None] + j + 1)
+        before = np.concatenate((self.stance_len[:, None], run[:, :-1]), axis=1)
+        self.stance_len = run[:, -1].copy()
+        rank = np.cumsum(end, axis=1)
+        avg = self.stance_avg_s
+        for r in range(1, int(rank[:, -1].max(initial=0)) + 1):
+            hit = end & (rank == r)
+            col = hit.argmax(axis=1)
+            dur = before[self.lanes, col] * self.dt
+            ok = hit.any(axis=1) & (dur > 0)
+            avg = np.where(ok, np.where(avg > 0, 0.8 * avg + 0.2 * dur, dur), avg)
+        self.stance_avg_s = avg
 
     # ------------------------------------------------------------------ observation
     def _features(self, lanes: NDArray[np.integer], interval: dict | None) -> NDArray[np.float32]:

@@ -165,13 +165,29 @@ def apply_min_duration(condition: NDArray[np.bool_], min_samples: int) -> NDArra
     return out
 
 
-class OnlineStanceDetector:
-    """Sample-by-sample detector state for N walkers (used inside the filter loop).
+@dataclass(frozen=True)
+class DetectorPass:
+    """Detector output over K samples of B walkers (not yet committed)."""
 
-    Thresholds can change every sample (per walker) — they are what an agent
+    stance: NDArray[np.bool_]  # (B, K) in stance after each sample
+    start: NDArray[np.bool_]  # (B, K) stance declared at this sample
+    end: NDArray[np.bool_]  # (B, K) stance ended at this sample
+    run: NDArray[np.int64]  # (B,) samples the condition has held at the last sample
+    history: Array  # (B, W-1, 2) last window inputs, oldest first (eq 5 only)
+    count: NDArray[np.int64]  # (B,) samples seen, capped at the window length
+
+
+class OnlineStanceDetector:
+    """Causal detector state for N walkers, fed any number of samples at a time.
+
+    Thresholds can change between calls (per walker) — they are what an agent
     tunes. For the SHOE detector the statistic is computed from the raw IMU
-    record (:func:`shoe_statistic`) and passed in; for eq (5) the caller
-    passes |ω'| and f'_x3, and the detector keeps the causal window sums.
+    record (:func:`shoe_statistic`) and its condition passed in; for eq (5)
+    the caller passes |ω'| and f'_x3, and the detector keeps the causal window
+    inputs. :meth:`evaluate_threshold` / :meth:`evaluate_condition` compute a
+    :class:`DetectorPass` for a block of samples without changing the state
+    (the filter may re-evaluate a block after a correction changed its
+    attitude); :meth:`commit` stores the state at the block's end.
     """
 
     def __init__(self, config: DetectorConfig, rate_hz: float, num_walkers: int) -> None:
@@ -182,43 +198,118 @@ class OnlineStanceDetector:
         self.n = num_walkers
         w = window_samples(config.window_s, rate_hz) if config.window_s > 0 else 1
         self.window = w
-        self._buf = np.zeros((num_walkers, w, 2))
-        self._count = np.zeros(num_walkers, dtype=np.int64)
-        # Per-walker ring position: a walker's sums never depend on its batch.
-        self._pos = np.zeros(num_walkers, dtype=np.int64)
-        self._lanes = np.arange(num_walkers)
+        # Window inputs (|ω'|, f'_x3) of the last W−1 samples, oldest first; zeros
+        # before the first sample, which the count leaves out of the mean.
+        self.history = np.zeros((num_walkers, w - 1, 2))
+        self.count = np.zeros(num_walkers, dtype=np.int64)
         self.run = np.zeros(num_walkers, dtype=np.int64)
         self.in_stance = np.zeros(num_walkers, dtype=bool)
 
     def reset(self, mask: NDArray[np.bool_] | None = None) -> None:
         sel = slice(None) if mask is None else mask
-        self._buf[sel] = 0.0
-        self._count[sel] = 0
-        self._pos[sel] = 0
+        self.history[sel] = 0.0
+        self.count[sel] = 0
         self.run[sel] = 0
         self.in_stance[sel] = False
 
+    def min_samples(self, min_stance_s: Array | float) -> NDArray[np.int64]:
+        """Minimum stance duration in samples (at least 1)."""
+        return np.maximum(1, np.round(np.asarray(min_stance_s) * self.rate_hz)).astype(np.int64)
+
+    def window_condition(
+        self,
+        lanes: NDArray[np.integer],
+        omega_norm: Array,
+        f_n3: Array,
+        omega_max: Array,
+        delta_f_max: Array,
+    ) -> tuple[NDArray[np.bool_], Array, NDArray[np.int64]]:
+        """Eq (5) with causal window means over ``(B, K)`` inputs of walkers
+        ``lanes``: the condition and the window state after the block."""
+        w = self.window
+        count = self.count[lanes]
+        k = omega_norm.shape[1]
+        if w == 1:
+            om, fm, hist = omega_norm, f_n3, self.history[lanes]
+        else:
+            x = np.concatenate((self.history[lanes], np.stack((omega_norm, f_n3), axis=-1)), axis=1)
+            sums = np.lib.stride_tricks.sliding_window_view(x, w, axis=1).sum(axis=-1)
+            seen = np.minimum(count[:, None] + np.arange(1, k + 1)[None, :], w)
+            om, fm = sums[..., 0] / seen, sums[..., 1] / seen
+            hist = x[:, k:]
+        cond = (om <= omega_max[:, None]) & (np.abs(fm - self.config.g) <= delta_f_max[:, None])
+        return cond, hist, np.minimum(count + k, w)
+
+    def evaluate_threshold(
+        self,
+        lanes: NDArray[np.integer],
+        omega_norm: Array,
+        f_n3: Array,
+        omega_max: Array,
+        delta_f_max: Array,
+        min_stance_s: Array,
+    ) -> DetectorPass:
+        """Eq (5) and the stance logic over ``(B, K)`` inputs of walkers ``lanes``."""
+        cond, hist, count = self.window_condition(lanes, omega_norm, f_n3, omega_max, delta_f_max)
+        return self._machine(lanes, cond, min_stance_s, hist, count)
+
+    def evaluate_condition(
+        self, lanes: NDArray[np.integer], condition: NDArray[np.bool_], min_stance_s: Array
+    ) -> DetectorPass:
+        """Stance logic over a given condition ``(B, K)`` (e.g. SHOE's T_k < γ)."""
+        k = condition.shape[1]
+        count = np.minimum(self.count[lanes] + k, self.window)
+        return self._machine(lanes, condition, min_stance_s, self.history[lanes], count)
+
+    def _machine(
+        self,
+        lanes: NDArray[np.integer],
+        cond: NDArray[np.bool_],
+        min_stance_s: Array,
+        history: Array,
+        count: NDArray[np.int64],
+    ) -> DetectorPass:
+        # run_k = samples the condition has held up to k: k − (last failing index),
+        # or the carried run + k + 1 when it held all block long.
+        k = cond.shape[1]
+        idx = np.arange(k)
+        last_fail = np.maximum.accumulate(np.where(cond, -1, idx[None, :]), axis=1)
+        run = np.where(last_fail >= 0, idx[None, :] - last_fail, self.run[lanes, None] + idx + 1)
+        now = run >= self.min_samples(min_stance_s)[:, None]
+        before = np.concatenate((self.in_stance[lanes, None], now[:, :-1]), axis=1)
+        return DetectorPass(now, now & ~before, before & ~now, run[:, -1], history, count)
+
+    def commit(self, lanes: NDArray[np.integer], result: DetectorPass) -> None:
+        """Store the state at the end of an evaluated block."""
+        self.run[lanes] = result.run
+        self.in_stance[lanes] = result.stance[:, -1]
+        self.history[lanes] = result.history
+        self.count[lanes] = result.count
+
+    # one-sample interface ---------------------------------------------------------
     def condition_threshold(
         self, omega_norm: Array, f_n3: Array, omega_max: Array, delta_f_max: Array
     ) -> NDArray[np.bool_]:
-        """Eq (5) for this sample with causal window means."""
-        if self.window == 1:
-            return (omega_norm <= omega_max) & (np.abs(f_n3 - self.config.g) <= delta_f_max)
-        self._buf[self._lanes, self._pos, 0] = omega_norm
-        self._buf[self._lanes, self._pos, 1] = f_n3
-        self._pos = (self._pos + 1) % self.window
-        self._count = np.minimum(self._count + 1, self.window)
-        means = self._buf.sum(axis=1) / self._count[:, None]
-        return (means[:, 0] <= omega_max) & (np.abs(means[:, 1] - self.config.g) <= delta_f_max)
+        """Eq (5) for one sample of every walker with causal window means;
+        advances the window (use with :meth:`advance`)."""
+        lanes = np.arange(self.n)
+        cond, self.history[:], self.count[:] = self.window_condition(
+            lanes,
+            np.asarray(omega_norm, dtype=float).reshape(self.n, 1),
+            np.asarray(f_n3, dtype=float).reshape(self.n, 1),
+            np.broadcast_to(np.asarray(omega_max, dtype=float), (self.n,)),
+            np.broadcast_to(np.asarray(delta_f_max, dtype=float), (self.n,)),
+        )
+        return cond[:, 0]
 
     def advance(
         self, condition: NDArray[np.bool_], min_stance_s: Array | float
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         """Feed one sample's condition; return (stance_start, stance_end) events."""
-        min_samples = np.maximum(1, np.round(np.asarray(min_stance_s) * self.rate_hz)).astype(int)
-        self.run = np.where(condition, self.run + 1, 0)
-        now = self.run >= min_samples
-        start = now & ~self.in_stance
-        end = ~now & self.in_stance
-        self.in_stance = now
-        return start, end
+        lanes = np.arange(self.n)
+        ms = np.broadcast_to(np.asarray(min_stance_s, dtype=float), (self.n,))
+        res = self.evaluate_condition(lanes, np.asarray(condition).reshape(self.n, 1), ms)
+        self.run[:] = res.run
+        self.in_stance[:] = res.stance[:, 0]
+        return res.start[:, 0], res.end[:, 0]
+

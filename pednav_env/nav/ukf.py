@@ -120,9 +120,9 @@ def sigma_points(
     n = weights.n
     L, bad = cholesky_lower((n + weights.lam) * P)
     offsets = np.swapaxes(L, -1, -2)  # row k = column k of L = filterpy's U[k]
-    plus = x[:, None, :] + offsets if add_fn is None else add_fn(x[:, None, :], offsets)
-    minus = x[:, None, :] - offsets if add_fn is None else add_fn(x[:, None, :], -offsets)
-    return np.concatenate((x[:, None, :], plus, minus), axis=1), bad
+    # [0, +U, −U] added to the mean in one call: χ₀ = x, χ_k = x + U_k, χ_{L+k} = x − U_k
+    d = np.concatenate((np.zeros_like(x[:, None, :]), offsets, -offsets), axis=1)
+    return (x[:, None, :] + d if add_fn is None else add_fn(x[:, None, :], d)), bad
 
 
 def unscented_transform(
@@ -136,7 +136,7 @@ def unscented_transform(
     Wm, Wc = weights.Wm, weights.Wc
     x = np.einsum("s,bsd->bd", Wm, sigmas) if mean_fn is None else mean_fn(sigmas, Wm)
     y = sigmas - x[:, None, :] if residual_fn is None else residual_fn(sigmas, x[:, None, :])
-    P = np.einsum("s,bsi,bsj->bij", Wc, y, y)
+    P = np.matmul(np.swapaxes(y * Wc[:, None], -1, -2), y)  # Σ_s Wc_s y_s y_sᵀ
     if noise_cov is not None:
         P = P + noise_cov
     return x, P
@@ -210,13 +210,22 @@ def update_linear(
     without drawing them. The filterpy oracle test checks the equality.
     """
     m = np.asarray(measured)
-    S = P_prior[:, m[:, None], m[None, :]] + R
-    Pxz = P_prior[:, :, m]
-    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(Pxz, -1, -2)), -1, -2)
-    y = z - x_prior[:, m]
-    nis = np.einsum("bi,bi->b", y, np.linalg.solve(S, y[..., None])[..., 0])
+    if np.array_equal(m, np.arange(m[0], m[0] + m.size)):  # contiguous: views, no gather
+        sl = slice(int(m[0]), int(m[0]) + m.size)
+        S = P_prior[:, sl, sl] + R
+        Pxz = P_prior[:, :, sl]
+        y = z - x_prior[:, sl]
+    else:
+        S = P_prior[:, m[:, None], m[None, :]] + R
+        Pxz = P_prior[:, :, m]
+        y = z - x_prior[:, m]
+    # One solve for S⁻¹ [P_xzᵀ | y]: Kᵀ = S⁻¹ P_xzᵀ (S symmetric) and S⁻¹ y.
+    n = P_prior.shape[-1]
+    sol = np.linalg.solve(S, np.concatenate((np.swapaxes(Pxz, -1, -2), y[..., None]), axis=-1))
+    KT = sol[..., :n]
+    nis = np.einsum("bi,bi->b", y, sol[..., n])
     accepted = np.ones(len(y), dtype=bool) if gate_nis is None else nis <= gate_nis
-    Ky = np.einsum("bij,bj->bi", K, y) * accepted[:, None]
+    Ky = np.matmul(y[:, None, :], KT)[:, 0] * accepted[:, None]
     x = x_prior + Ky if add_x is None else add_x(x_prior, Ky)
-    KSK = np.einsum("bij,bjk,blk->bil", K, S, K) * accepted[:, None, None]
+    KSK = np.matmul(Pxz, KT) * accepted[:, None, None]  # K S Kᵀ = P_xz Kᵀ
     return UpdateResult(x, symmetrize(P_prior - KSK), y, S, nis, accepted)

@@ -52,15 +52,21 @@ from pednav_env.nav.detectors import (
     ShoeDetectorConfig,
     ThresholdDetectorConfig,
 )
+from pednav_env.nav.preintegration import Preintegrals, preintegrate, relative_increments
 from pednav_env.nav.strapdown import advance_sigma, step_increments
 from pednav_env.nav.ukf import (
     MerweWeights,
     repair_covariance,
     sigma_points,
-    unscented_transform,
     update_linear,
 )
-from pednav_env.rotations import euler_to_quat, quat_rotate, quat_to_euler, wrap_angle
+from pednav_env.rotations import (
+    euler_to_quat,
+    quat_multiply,
+    quat_rotate,
+    quat_to_euler,
+    wrap_angle,
+)
 from pednav_env.sensors.imu import DriftModel, ImuSpec
 
 Array = NDArray[np.float64]
@@ -73,6 +79,9 @@ ANGLES = slice(6, 9)
 MEASURED = [2, 3, 4, 5]
 #: Velocity norm beyond which a walker is declared diverged (m/s).
 DIVERGENCE_SPEED = 50.0
+#: Samples per :meth:`ZuptUkf.advance` call in :meth:`ZuptUkf.run`.
+RUN_BLOCK = 100
+_CONJ = np.array([1.0, -1.0, -1.0, -1.0])
 
 
 # --------------------------------------------------------------------------- model functions
@@ -97,6 +106,24 @@ def state_mean(sigmas: Array, Wm: Array) -> Array:
     ref = sigmas[..., 0, :]
     d = state_residual(sigmas, ref[..., None, :])
     return state_add(ref, np.einsum("s,...sd->...d", Wm, d))
+
+
+def prior_moments(sigmas: Array, weights: MerweWeights, Q: Array) -> tuple[Array, Array]:
+    """Unscented transform of sigma points ``(B, S, 9)`` with wrapped angles,
+    plus process noise: the same mean and covariance as
+    ``unscented_transform(sigmas, weights, Q, state_mean, state_residual)``
+    (filterpy's ``x_mean_fn`` / ``residual_x``), with the residuals from the
+    central point computed once."""
+    ref = sigmas[:, 0, :]
+    d = sigmas - ref[:, None, :]
+    d[..., ANGLES] = wrap_angle(d[..., ANGLES])
+    mean_d = np.matmul(weights.Wm, d)
+    x = ref + mean_d
+    x[..., ANGLES] = wrap_angle(x[..., ANGLES])
+    y = d - mean_d[:, None, :]
+    y[..., ANGLES] = wrap_angle(y[..., ANGLES])
+    P = np.matmul(np.swapaxes(y * weights.Wc[:, None], -1, -2), y) + Q
+    return x, P
 
 
 def state_to_nav(y: Array) -> tuple[Array, Array, Array]:
@@ -236,6 +263,37 @@ class UpdateRecord:
     P: Array
     nis: float
     accepted: bool
+
+
+@dataclass(frozen=True)
+class BlockResult:
+    """Output of :meth:`ZuptUkf.advance` over a block of K samples."""
+
+    stance: NDArray[np.bool_]  # (N, K) detected stance after each sample
+    start: NDArray[np.bool_]  # (N, K) stance declared at the sample
+    end: NDArray[np.bool_]  # (N, K) stance ended at the sample
+    accepted: NDArray[np.int64]  # (N,) ZUPTs applied in the block
+    nis_log_sum: Array  # (N,) Σ log(1 + NIS) of those ZUPTs
+    position: Array  # (N, 3) mean position (m) after each walker's valid samples
+    positions: Array | None  # (N, K, 3) mean position after each sample (record)
+    states: Array | None  # (N, K, 9) mean state after each sample (record="state")
+
+
+def _diverging(q: Array, v: Array, p: Array) -> NDArray[np.bool_]:
+    """Walkers ``(..., ·)`` (central sigma point) that have diverged: a non-finite
+    state or a speed above :data:`DIVERGENCE_SPEED`."""
+    speed2 = np.einsum("...i,...i->...", v, v)
+    bad = ~np.isfinite(speed2) | (speed2 > DIVERGENCE_SPEED**2)
+    return bad | ~np.isfinite(q).all(axis=-1) | ~np.isfinite(p).all(axis=-1)
+
+
+def _vertical_row(q_central: Array, D_anchor: Array) -> Array:
+    """Row r with f'_x3 = r · F_j for the block's samples after a redraw at
+    ``D_anchor``: e₃ᵀ C(q_c) C(D_a)ᵀ, i.e. C(D_a) C(q_c)ᵀ e₃ (paper 003 eq 5's
+    vertical specific force from the central sigma point's attitude)."""
+    e3 = np.zeros(q_central.shape[:-1] + (3,))
+    e3[..., 2] = 1.0
+    return quat_rotate(D_anchor, quat_rotate(q_central * _CONJ, e3))
 
 
 @dataclass
@@ -379,77 +437,244 @@ class ZuptUkf:
         shoe_statistic: Array | None = None,
         increments: tuple[Array, Array, Array] | None = None,
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-        """Advance all walkers by one IMU sample ``(N, 3)`` each.
+        """Advance all walkers by one IMU sample ``(N, 3)`` each (:meth:`advance`
+        with one sample). Returns the detected (stance_start, stance_end) events."""
+        if increments is not None:
+            increments = tuple(x[:, None] for x in increments)  # type: ignore[assignment]
+        res = self.advance(
+            np.asarray(omega_b, dtype=float)[:, None],
+            np.asarray(f_b, dtype=float)[:, None],
+            None if shoe_statistic is None else np.asarray(shoe_statistic)[:, None],
+            increments=increments,
+        )
+        return res.start[:, 0], res.end[:, 0]
 
-        ``increments`` may carry :meth:`increments` of this sample, computed
-        ahead for many samples at once. Returns the detected (stance_start,
-        stance_end) events of this sample.
+    def advance(
+        self,
+        omega_b: Array,
+        f_b: Array,
+        shoe_statistic: Array | None = None,
+        valid: NDArray[np.integer] | None = None,
+        increments: tuple[Array, Array, Array] | None = None,
+        record: str | None = None,
+    ) -> BlockResult:
+        """Advance all walkers through a block of K IMU samples ``(N, K, 3)``.
+
+        The same filter as one sample at a time — detector, ZUPT at every
+        detected stance start and end, strapdown of every sigma point between
+        them — computed in a few batched passes (module docstring of
+        :mod:`pednav_env.nav.preintegration`): the sigma points of a walker are
+        moved to any sample of the block from its last redraw through the
+        walker's preintegrated increments, and the updates of all walkers run
+        together in rounds (every walker's first event of the block, then every
+        walker's second, …). Walker ``i`` only processes its first ``valid[i]``
+        samples' events (the rest is padding after the end of its record).
+        ``record`` = ``"position"`` or ``"state"`` also returns the mean after
+        every sample.
         """
+        n, k = self.n, omega_b.shape[1]
+        dt = self.dt
         if increments is None:
             increments = self.increments(omega_b, f_b)
-        omega_b, dqT, f_mid = increments
+        omega_c, dqT, f_mid = increments
+        if self.uses_shoe and shoe_statistic is None:
+            raise ValueError("the SHOE detector needs shoe_statistic for each sample")
+        valid = np.full(n, k) if valid is None else np.asarray(valid, dtype=np.int64)
+        frozen = self.diverged.copy()
+        pre = preintegrate(dqT, f_mid, dt, frozen)
+        kidx = np.arange(k)
+        boundaries = self.config.update_mode is UpdateMode.STANCE_BOUNDARIES
+        anchor = np.zeros(n, dtype=np.int64)  # sample of each walker's last redraw
+        anchor_elapsed = self.elapsed_s.copy()  # time since the redraw before that anchor
+        next_from = np.zeros(n, dtype=np.int64)
+        diverged_at = np.full(n, k + 1)  # state index t (after sample t−1); k+1 = none
+        last_accepted = np.full(n, -1)
+        nis_log_sum = np.zeros(n)
+        accepted_count = np.zeros(n, dtype=np.int64)
+        stance = np.zeros((n, k), dtype=bool)
+        start = np.zeros((n, k), dtype=bool)
+        end = np.zeros((n, k), dtype=bool)
+        det = self.detector
+        run_end = np.zeros(n, dtype=np.int64)
+        hist_end = np.zeros_like(det.history)
+        count_end = np.zeros(n, dtype=np.int64)
+        anchors: list[tuple[NDArray[np.int64], NDArray[np.int64], Array, Array, Array]] = []
+        if record is not None:
+            start_sigmas = (self.sig_q.copy(), self.sig_v.copy(), self.sig_p.copy())
+            anchors.append((np.arange(n), anchor.copy(), *start_sigmas))
         if self.uses_shoe:
-            if shoe_statistic is None:
-                raise ValueError("the SHOE detector needs shoe_statistic for each sample")
-            cond = shoe_statistic <= self.shoe_threshold
+            shoe_cond = np.asarray(shoe_statistic) <= self.shoe_threshold[:, None]
         else:
-            f_n3 = quat_rotate(self.sig_q[:, 0], f_mid)[:, 2]
-            omega_norm = np.sqrt(np.einsum("ni,ni->n", omega_b, omega_b))
-            cond = self.detector.condition_threshold(
-                omega_norm, f_n3, self.omega_max, self.delta_f_max
+            omega_norm = np.sqrt(np.einsum("nki,nki->nk", omega_c, omega_c))
+            # f'_x3 at sample j = e₃ᵀ C(q_c,j) f_mid_j = rows_j · F_j, rows from the
+            # central sigma point's attitude at the walker's last redraw.
+            rows = np.empty((n, k, 3))
+            rows[:] = _vertical_row(self.sig_q[:, 0], pre.D[:, 0])[:, None, :]
+        todo = np.arange(n)
+        while todo.size:
+            if self.uses_shoe:
+                res = det.evaluate_condition(todo, shoe_cond[todo], self.min_stance_s[todo])
+            else:
+                f_n3 = np.einsum("bkd,bkd->bk", rows[todo], pre.F[todo])
+                res = det.evaluate_threshold(
+                    todo,
+                    omega_norm[todo],
+                    f_n3,
+                    self.omega_max[todo],
+                    self.delta_f_max[todo],
+                    self.min_stance_s[todo],
+                )
+            stance[todo], start[todo], end[todo] = res.stance, res.start, res.end
+            run_end[todo], hist_end[todo], count_end[todo] = res.run, res.history, res.count
+            ev = (res.start | res.end) if boundaries else (res.stance | res.end)
+            ev &= (kidx >= next_from[todo, None]) & (kidx < valid[todo, None])
+            ev &= ~frozen[todo, None]
+            has = ev.any(axis=1)
+            idx, e = todo[has], ev[has].argmax(axis=1)
+            if idx.size == 0:
+                break
+            q, v, p = self._sigmas_at(idx, anchor[idx], e, pre)
+            # A walker whose prior is non-finite or too fast diverged: no more ZUPTs.
+            bad = _diverging(q[:, 0], v[:, 0], p[:, 0])
+            if bad.any():
+                diverged_at[idx[bad]] = e[bad]
+                ok = ~bad
+                idx, e, q, v, p = idx[ok], e[ok], q[ok], v[ok], p[ok]
+                if idx.size == 0:
+                    break
+            elapsed = anchor_elapsed[idx] + (e - anchor[idx]) * dt
+            kinds = np.where(start[idx, e], "start", np.where(end[idx, e], "end", "stance"))
+            accepted, nis = self._update(idx, q, v, p, elapsed, kinds, self.sample[idx] + e)
+            anchor[idx], anchor_elapsed[idx], next_from[idx] = e, 0.0, e + 1
+            nis_log_sum[idx] += np.where(accepted, np.log1p(nis), 0.0)
+            accepted_count[idx] += accepted
+            last_accepted[idx[accepted]] = e[accepted]
+            if record is not None:
+                anchors.append((idx, e.copy(), self.sig_q[idx], self.sig_v[idx], self.sig_p[idx]))
+            if not self.uses_shoe:
+                r = _vertical_row(self.sig_q[idx, 0], pre.D[idx, e])
+                later = kidx[None, :] > e[:, None]
+                rows[idx] = np.where(later[..., None], r[:, None, :], rows[idx])
+            todo = idx
+        det.run[:], det.history[:], det.count[:] = run_end, hist_end, count_end
+        det.in_stance[:] = stance[:, -1]
+        self.stance_starts += start.sum(axis=1)
+
+        # Mean position after the walker's valid samples, then the sigma points at
+        # the block's end (the next block's starting point).
+        all_lanes = np.arange(n)
+        _, _, p_valid = self._sigmas_at(all_lanes, anchor, valid, pre)
+        position = np.einsum("s,nsd->nd", self.weights.Wm, p_valid)
+        live = ~frozen
+        if live.any():
+            lanes = all_lanes[live]
+            # every sample after the last ZUPT: first non-finite or too fast state
+            open_ = lanes[diverged_at[lanes] > k]
+            t = np.broadcast_to(np.arange(1, k + 1), (open_.size, k))
+            q, v, p = self._sigmas_at(open_, anchor[open_], t, pre, sigma=slice(0, 1))
+            bad = _diverging(q[..., 0, :], v[..., 0, :], p[..., 0, :]) & (t > anchor[open_, None])
+            hit = bad.any(axis=1)
+            diverged_at[open_[hit]] = bad[hit].argmax(axis=1) + 1
+            q, v, p = self._sigmas_at(lanes, anchor[lanes], np.full(lanes.size, k), pre)
+            self.sig_q[lanes], self.sig_v[lanes], self.sig_p[lanes] = q, v, p
+        self.elapsed_s = anchor_elapsed + (k - anchor) * dt
+        upd = last_accepted >= 0
+        self.time_since_update_s = np.where(
+            upd, (k - last_accepted) * dt, self.time_since_update_s + k * dt
+        )
+        self.sample += k
+        newly = diverged_at <= k
+        if newly.any():
+            self._freeze(all_lanes[newly])
+            frozen_pos = self.mean_position()
+            held = newly & (diverged_at <= valid)
+            position[held] = frozen_pos[held]
+        positions = states = None
+        if record is not None:
+            positions, states = self._record(anchors, pre, k, record, diverged_at)
+        return BlockResult(
+            stance, start, end, accepted_count, nis_log_sum, position, positions, states
+        )
+
+    def _sigmas_at(
+        self,
+        lanes: NDArray[np.integer],
+        anchor: NDArray[np.integer],
+        t: NDArray[np.integer],
+        pre: Preintegrals,
+        sigma: slice = slice(None),
+        sigmas: tuple[Array, Array, Array] | None = None,
+    ) -> tuple[Array, Array, Array]:
+        """Sigma points of walkers ``lanes`` at block sample ``t`` ((B,) or (B, T)),
+        moved from their redraw at ``anchor`` (B,) by the preintegrals; from the
+        current sigma points, or from ``sigmas`` (q, v, x of ``lanes``)."""
+        D_rel, A_rel, B_rel, tau = relative_increments(pre, lanes, anchor, t, self.dt)
+        if sigmas is None:
+            sigmas = (self.sig_q[lanes], self.sig_v[lanes], self.sig_p[lanes])
+        q0, v0, p0 = (x[:, sigma] for x in sigmas)
+        if np.ndim(t) == 2:
+            q0, v0, p0 = q0[:, None], v0[:, None], p0[:, None]
+        q = quat_multiply(q0, D_rel[..., None, :])
+        v = v0 + quat_rotate(q0, A_rel[..., None, :])
+        v[..., 2] -= self.config.g * tau[..., None]
+        p = p0 + v0 * tau[..., None, None] + quat_rotate(q0, B_rel[..., None, :])
+        p[..., 2] -= 0.5 * self.config.g * (tau * tau)[..., None]
+        return q, v, p
+
+    def _freeze(self, idx: NDArray[np.integer]) -> None:
+        """Declare walkers diverged: they stay at their last posterior (finite)."""
+        self.diverged[idx] = True
+        x = np.nan_to_num(self.x[idx], nan=0.0, posinf=0.0, neginf=0.0)
+        self.set_state(idx, x, repair_covariance(np.nan_to_num(self.P[idx]))[0])
+        self.sig_v[idx] = 0.0
+
+    def _record(
+        self,
+        anchors: list[tuple[NDArray[np.int64], NDArray[np.int64], Array, Array, Array]],
+        pre: Preintegrals,
+        k: int,
+        record: str,
+        diverged_at: NDArray[np.int64],
+    ) -> tuple[Array, Array | None]:
+        """Mean position (and state) after every sample of the block: each time
+        from the walker's last redraw before it."""
+        n = self.n
+        positions = np.zeros((n, k, 3))
+        states = np.zeros((n, k, STATE_DIM)) if record == "state" else None
+        t_all = np.arange(1, k + 1)
+        for lanes, a, q0, v0, p0 in anchors:
+            t = np.broadcast_to(t_all, (len(lanes), k))
+            q, v, p = self._sigmas_at(lanes, a, t, pre, sigmas=(q0, v0, p0))
+            later = (t > a[:, None])[..., None]
+            positions[lanes] = np.where(
+                later, np.einsum("s,btsd->btd", self.weights.Wm, p), positions[lanes]
             )
-        start, end = self.detector.advance(cond, self.min_stance_s)
-        self.stance_starts += start
-        if self.config.update_mode is UpdateMode.STANCE_BOUNDARIES:
-            event = start | end
-        else:
-            event = self.detector.in_stance | end
-        event &= ~self.diverged
-        if event.any():
-            idx = np.flatnonzero(event)
-            kinds = np.where(start[idx], "start", np.where(end[idx], "end", "stance"))
-            self._update(idx, kinds)
-        q, v, p = advance_sigma(
-            self.sig_q, self.sig_v, self.sig_p, dqT, f_mid, self.dt, self.config.g
-        )
-        if self.diverged.any():  # diverged walkers stay frozen where they were declared so
-            frozen = self.diverged[:, None, None]
-            q = np.where(frozen, self.sig_q, q)
-            v = np.where(frozen, self.sig_v, v)
-            p = np.where(frozen, self.sig_p, p)
-        self.sig_q, self.sig_v, self.sig_p = q, v, p
-        self.elapsed_s += self.dt
-        self.time_since_update_s += self.dt
-        self.sample += 1
-        self._check_divergence()
-        return start, end
+            if states is not None:
+                sig = nav_to_state(q, v, p)
+                states[lanes] = np.where(later, state_mean(sig, self.weights.Wm), states[lanes])
+        hold = t_all[None, :] >= diverged_at[:, None]  # held at the frozen posterior
+        if hold.any():
+            positions = np.where(hold[..., None], self.mean_position()[:, None, :], positions)
+            if states is not None:
+                states = np.where(hold[..., None], self.mean_state()[:, None, :], states)
+        return positions, states
 
-    def _check_divergence(self) -> None:
-        # The central sigma point stands for the walker: sigma points are drawn
-        # within a few mm of it, and a non-finite one reaches it at the next update.
-        v0 = self.sig_v[:, 0]
-        speed2 = np.einsum("ni,ni->n", v0, v0)
-        bad = ~np.isfinite(speed2) | (speed2 > DIVERGENCE_SPEED**2)
-        bad |= ~np.isfinite(self.sig_q[:, 0]).all(axis=1) | ~np.isfinite(self.sig_p[:, 0]).all(
-            axis=1
-        )
-        new = bad & ~self.diverged
-        if new.any():
-            self.diverged |= new
-            # Freeze diverged walkers at a finite state so nothing downstream sees NaN.
-            idx = np.flatnonzero(new)
-            x = np.nan_to_num(self.x[idx], nan=0.0, posinf=0.0, neginf=0.0)
-            self.set_state(idx, x, repair_covariance(np.nan_to_num(self.P[idx]))[0])
-            self.sig_v[idx] = 0.0
-
-    def _update(self, idx: NDArray[np.integer], kinds: NDArray[np.str_]) -> None:
+    def _update(
+        self,
+        idx: NDArray[np.integer],
+        sig_q: Array,
+        sig_v: Array,
+        sig_p: Array,
+        elapsed_s: Array,
+        kinds: NDArray[np.str_],
+        sample: NDArray[np.integer],
+    ) -> tuple[NDArray[np.bool_], Array]:
+        """ZUPT of walkers ``idx`` from their propagated sigma points; redraws them."""
         c = self.config
         W = self.weights
-        sig = nav_to_state(self.sig_q[idx], self.sig_v[idx], self.sig_p[idx])
-        Q = process_noise(
-            c.assumed_imu, self.rate_hz, self.elapsed_s[idx], self.process_noise_scale[idx]
-        )
-        x_prior, P_prior = unscented_transform(sig, W, Q, state_mean, state_residual)
+        sig = nav_to_state(sig_q, sig_v, sig_p)
+        Q = process_noise(c.assumed_imu, self.rate_hz, elapsed_s, self.process_noise_scale[idx])
+        x_prior, P_prior = prior_moments(sig, W, Q)
         b = len(idx)
         z = np.zeros((b, 4))
         z[:, 0] = self.height_ref[idx]
@@ -466,14 +691,13 @@ class ZuptUkf:
         self.updates[idx] += res.accepted
         self.rejected[idx] += ~res.accepted
         self.last_nis[idx] = res.nis
-        self.time_since_update_s[idx[res.accepted]] = 0.0
         self.set_state(idx, res.x, res.P)
         if self.record_updates:
             for j, w in enumerate(idx):
                 self.history.append(
                     UpdateRecord(
                         int(w),
-                        int(self.sample[w]),
+                        int(sample[j]),
                         str(kinds[j]),
                         x_prior[j].copy(),
                         P_prior[j].copy(),
@@ -483,6 +707,7 @@ class ZuptUkf:
                         bool(res.accepted[j]),
                     )
                 )
+        return res.accepted, res.nis
 
     # ------------------------------------------------------------------ queries
     def mean_state(self) -> Array:
@@ -495,10 +720,14 @@ class ZuptUkf:
         return np.einsum("s,nsd->nd", self.weights.Wm, self.sig_p)
 
     # ------------------------------------------------------------------ whole records
-    def run(self, omega_b: Array, f_b: Array, record: bool = True) -> ZuptRun:
+    def run(
+        self, omega_b: Array, f_b: Array, record: bool = True, block_samples: int = RUN_BLOCK
+    ) -> ZuptRun:
         """Align on the first ``alignment_s`` (the walker stands still), then filter
         the rest of the records ``(N, T, 3)``: navigation starts at t₀ = the end
-        of the alignment, as in paper 003."""
+        of the alignment, as in paper 003. The records are fed to :meth:`advance`
+        in blocks of ``block_samples`` (the result depends on the blocking only
+        through rounding)."""
         omega_b = np.asarray(omega_b, dtype=float)
         f_b = np.asarray(f_b, dtype=float)
         if omega_b.shape != f_b.shape or omega_b.ndim != 3 or omega_b.shape[0] != self.n:
@@ -522,11 +751,19 @@ class ZuptUkf:
         stance = np.zeros((self.n, t), dtype=bool)
         if record:
             xs[:, : n_align + 1] = self.mean_state()[:, None, :]
-        for m in range(n_align, t):
-            self.step(omega_b[:, m], f_b[:, m], None if shoe is None else shoe[:, m])
-            stance[:, m] = self.detector.in_stance
+        if block_samples < 1:
+            raise ValueError(f"block_samples must be ≥ 1, got {block_samples!r}")
+        for m0 in range(n_align, t, block_samples):
+            m1 = min(m0 + block_samples, t)
+            res = self.advance(
+                omega_b[:, m0:m1],
+                f_b[:, m0:m1],
+                None if shoe is None else shoe[:, m0:m1],
+                record="state" if record else None,
+            )
+            stance[:, m0:m1] = res.stance
             if record:
-                xs[:, m + 1] = self.mean_state()
+                xs[:, m0 + 1 : m1 + 1] = res.states
         return ZuptRun(
             xs,
             n_align,

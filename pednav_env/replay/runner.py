@@ -156,16 +156,14 @@ def run_prepared(
                 row = table[min(interval, table.shape[0] - 1)]
                 _set_knob(e, name, np.broadcast_to(row, (n,)))
         s1 = min(s0 + k, m)
-        omega_c, dqT, f_mid = e.increments(w[:, s0:s1], f[:, s0:s1])
-        for j in range(s1 - s0):
-            e.step(
-                w[:, s0 + j],
-                f[:, s0 + j],
-                None if shoe is None else shoe[:, s0 + j],
-                increments=(omega_c[:, j], dqT[:, j], f_mid[:, j]),
-            )
-            pos[:, s0 + j] = e.mean_position()
-            stance[:, s0 + j] = e.detector.in_stance
+        res = e.advance(
+            w[:, s0:s1],
+            f[:, s0:s1],
+            None if shoe is None else shoe[:, s0:s1],
+            record="position",
+        )
+        pos[:, s0:s1] = res.positions
+        stance[:, s0:s1] = res.stance
     return RecordingRun(
         prep,
         pos,
