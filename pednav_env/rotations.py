@@ -82,6 +82,16 @@ def euler_to_dcm(euler: ArrayLike) -> Array:
     return C
 
 
+def dcm_to_euler(C: ArrayLike) -> Array:
+    """Euler angles ``[..., (ψ, θ, γ)]`` (rad) of ``C_nb`` ``(..., 3, 3)``, 3-2-1 order
+    (the inverse of :func:`euler_to_dcm`; same conventions as :func:`quat_to_euler`)."""
+    C = np.asarray(C, dtype=float)
+    yaw = np.arctan2(C[..., 1, 0], C[..., 0, 0])
+    pitch = np.arcsin(np.clip(-C[..., 2, 0], -1.0, 1.0))
+    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])
+    return np.stack((yaw, pitch, roll), axis=-1)
+
+
 def quat_to_dcm(q: ArrayLike) -> Array:
     """``C_nb`` of a unit quaternion ``q_nb``, shape ``(..., 3, 3)``."""
     q = np.asarray(q, dtype=float)

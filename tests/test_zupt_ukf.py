@@ -91,7 +91,7 @@ def test_covariance_repair_is_counted_and_never_nan():
     x = np.zeros((2, 9))
     eng.set_state(np.arange(2), x, np.concatenate((P, np.eye(9)[None] * 1e-4)))
     assert eng.repairs.tolist() == [1, 0]
-    assert np.all(np.isfinite(eng.sig_p)) and np.all(np.isfinite(eng.sig_q))
+    assert np.all(np.isfinite(eng.sig_p)) and np.all(np.isfinite(eng.sig_C))
 
 
 def test_garbage_input_diverges_cleanly():

@@ -53,7 +53,7 @@ from pednav_env.nav.detectors import (
     ThresholdDetectorConfig,
 )
 from pednav_env.nav.preintegration import Preintegrals, preintegrate, relative_increments
-from pednav_env.nav.strapdown import advance_sigma, step_increments
+from pednav_env.nav.strapdown import advance_sigma, step_increments, step_increments_dcm
 from pednav_env.nav.ukf import (
     MerweWeights,
     repair_covariance,
@@ -61,9 +61,9 @@ from pednav_env.nav.ukf import (
     update_linear,
 )
 from pednav_env.rotations import (
+    dcm_to_euler,
+    euler_to_dcm,
     euler_to_quat,
-    quat_multiply,
-    quat_rotate,
     quat_to_euler,
     wrap_angle,
 )
@@ -81,7 +81,6 @@ MEASURED = [2, 3, 4, 5]
 DIVERGENCE_SPEED = 50.0
 #: Samples per :meth:`ZuptUkf.advance` call in :meth:`ZuptUkf.run`.
 RUN_BLOCK = 100
-_CONJ = np.array([1.0, -1.0, -1.0, -1.0])
 
 
 # --------------------------------------------------------------------------- model functions
@@ -279,21 +278,31 @@ class BlockResult:
     states: Array | None  # (N, K, 9) mean state after each sample (record="state")
 
 
-def _diverging(q: Array, v: Array, p: Array) -> NDArray[np.bool_]:
+def _diverging(C: Array, v: Array, p: Array) -> NDArray[np.bool_]:
     """Walkers ``(..., ·)`` (central sigma point) that have diverged: a non-finite
     state or a speed above :data:`DIVERGENCE_SPEED`."""
     speed2 = np.einsum("...i,...i->...", v, v)
     bad = ~np.isfinite(speed2) | (speed2 > DIVERGENCE_SPEED**2)
-    return bad | ~np.isfinite(q).all(axis=-1) | ~np.isfinite(p).all(axis=-1)
+    return bad | ~np.isfinite(C).all(axis=(-2, -1)) | ~np.isfinite(p).all(axis=-1)
 
 
-def _vertical_row(q_central: Array, D_anchor: Array) -> Array:
+def state_to_dcm(y: Array) -> tuple[Array, Array, Array]:
+    """(C_nb, v, x) from state vectors ``(..., 9)`` (the engine's sigma-point form)."""
+    euler = np.stack((y[..., 8], y[..., 6], y[..., 7]), axis=-1)
+    return euler_to_dcm(euler), y[..., 3:6].copy(), y[..., 0:3].copy()
+
+
+def dcm_to_state(C_nb: Array, vel_n: Array, pos_n: Array) -> Array:
+    """State vectors ``(..., 9)`` from attitude matrix, velocity and position."""
+    e = dcm_to_euler(C_nb)
+    return np.concatenate((pos_n, vel_n, e[..., 1:2], e[..., 2:3], e[..., 0:1]), axis=-1)
+
+
+def _vertical_row(C_central: Array, D_anchor: Array) -> Array:
     """Row r with f'_x3 = r · F_j for the block's samples after a redraw at
-    ``D_anchor``: e₃ᵀ C(q_c) C(D_a)ᵀ, i.e. C(D_a) C(q_c)ᵀ e₃ (paper 003 eq 5's
-    vertical specific force from the central sigma point's attitude)."""
-    e3 = np.zeros(q_central.shape[:-1] + (3,))
-    e3[..., 2] = 1.0
-    return quat_rotate(D_anchor, quat_rotate(q_central * _CONJ, e3))
+    ``D_anchor``: e₃ᵀ C_c D_aᵀ, i.e. D_a C_cᵀ e₃ (paper 003 eq 5's vertical
+    specific force from the central sigma point's attitude C_c)."""
+    return np.matmul(D_anchor, C_central[..., 2, :, None])[..., 0]
 
 
 @dataclass
@@ -352,8 +361,8 @@ class ZuptUkf:
         self.history: list[UpdateRecord] = []
         self.x = np.zeros((n, STATE_DIM))
         self.P = np.zeros((n, STATE_DIM, STATE_DIM))
-        self.sig_q = np.zeros((n, self.num_sigmas, 4))
-        self.sig_q[..., 0] = 1.0
+        #: Sigma points: attitude matrices C_nb, velocities, positions.
+        self.sig_C = np.broadcast_to(np.eye(3), (n, self.num_sigmas, 3, 3)).copy()
         self.sig_v = np.zeros((n, self.num_sigmas, 3))
         self.sig_p = np.zeros((n, self.num_sigmas, 3))
         self.elapsed_s = np.zeros(n)
@@ -417,7 +426,7 @@ class ZuptUkf:
         chi, bad = sigma_points(x, P, self.weights, add_fn=state_add)
         self.repairs[idx] += bad
         self.x[idx], self.P[idx] = x, P
-        self.sig_q[idx], self.sig_v[idx], self.sig_p[idx] = state_to_nav(chi)
+        self.sig_C[idx], self.sig_v[idx], self.sig_p[idx] = state_to_dcm(chi)
         self.elapsed_s[idx] = 0.0
 
     # ------------------------------------------------------------------ step
@@ -427,8 +436,8 @@ class ZuptUkf:
         force at mid-interval attitude (``omega_b``/``f_b`` (N, ..., 3))."""
         bias = self.gyro_bias.reshape((self.n,) + (1,) * (omega_b.ndim - 2) + (3,))
         omega_c = omega_b - bias
-        dqT, f_mid = step_increments(omega_c, f_b, self.dt)
-        return omega_c, dqT, f_mid
+        dC, f_mid = step_increments_dcm(omega_c, f_b, self.dt)
+        return omega_c, dC, f_mid
 
     def step(
         self,
@@ -500,7 +509,7 @@ class ZuptUkf:
         count_end = np.zeros(n, dtype=np.int64)
         anchors: list[tuple[NDArray[np.int64], NDArray[np.int64], Array, Array, Array]] = []
         if record is not None:
-            start_sigmas = (self.sig_q.copy(), self.sig_v.copy(), self.sig_p.copy())
+            start_sigmas = (self.sig_C.copy(), self.sig_v.copy(), self.sig_p.copy())
             anchors.append((np.arange(n), anchor.copy(), *start_sigmas))
         if self.uses_shoe:
             shoe_cond = np.asarray(shoe_statistic) <= self.shoe_threshold[:, None]
@@ -509,7 +518,7 @@ class ZuptUkf:
             # f'_x3 at sample j = e₃ᵀ C(q_c,j) f_mid_j = rows_j · F_j, rows from the
             # central sigma point's attitude at the walker's last redraw.
             rows = np.empty((n, k, 3))
-            rows[:] = _vertical_row(self.sig_q[:, 0], pre.D[:, 0])[:, None, :]
+            rows[:] = _vertical_row(self.sig_C[:, 0], pre.D[:, 0])[:, None, :]
         todo = np.arange(n)
         while todo.size:
             if self.uses_shoe:
@@ -550,9 +559,9 @@ class ZuptUkf:
             accepted_count[idx] += accepted
             last_accepted[idx[accepted]] = e[accepted]
             if record is not None:
-                anchors.append((idx, e.copy(), self.sig_q[idx], self.sig_v[idx], self.sig_p[idx]))
+                anchors.append((idx, e.copy(), self.sig_C[idx], self.sig_v[idx], self.sig_p[idx]))
             if not self.uses_shoe:
-                r = _vertical_row(self.sig_q[idx, 0], pre.D[idx, e])
+                r = _vertical_row(self.sig_C[idx, 0], pre.D[idx, e])
                 later = kidx[None, :] > e[:, None]
                 rows[idx] = np.where(later[..., None], r[:, None, :], rows[idx])
             todo = idx
@@ -572,11 +581,12 @@ class ZuptUkf:
             open_ = lanes[diverged_at[lanes] > k]
             t = np.broadcast_to(np.arange(1, k + 1), (open_.size, k))
             q, v, p = self._sigmas_at(open_, anchor[open_], t, pre, sigma=slice(0, 1))
-            bad = _diverging(q[..., 0, :], v[..., 0, :], p[..., 0, :]) & (t > anchor[open_, None])
+            bad = _diverging(q[..., 0, :, :], v[..., 0, :], p[..., 0, :])
+            bad &= t > anchor[open_, None]
             hit = bad.any(axis=1)
             diverged_at[open_[hit]] = bad[hit].argmax(axis=1) + 1
             q, v, p = self._sigmas_at(lanes, anchor[lanes], np.full(lanes.size, k), pre)
-            self.sig_q[lanes], self.sig_v[lanes], self.sig_p[lanes] = q, v, p
+            self.sig_C[lanes], self.sig_v[lanes], self.sig_p[lanes] = q, v, p
         self.elapsed_s = anchor_elapsed + (k - anchor) * dt
         upd = last_accepted >= 0
         self.time_since_update_s = np.where(
@@ -607,19 +617,20 @@ class ZuptUkf:
     ) -> tuple[Array, Array, Array]:
         """Sigma points of walkers ``lanes`` at block sample ``t`` ((B,) or (B, T)),
         moved from their redraw at ``anchor`` (B,) by the preintegrals; from the
-        current sigma points, or from ``sigmas`` (q, v, x of ``lanes``)."""
-        D_rel, A_rel, B_rel, tau = relative_increments(pre, lanes, anchor, t, self.dt)
+        current sigma points, or from ``sigmas`` (C, v, x of ``lanes``)."""
+        D_rel, AB_rel, tau = relative_increments(pre, lanes, anchor, t, self.dt)
         if sigmas is None:
-            sigmas = (self.sig_q[lanes], self.sig_v[lanes], self.sig_p[lanes])
-        q0, v0, p0 = (x[:, sigma] for x in sigmas)
+            sigmas = (self.sig_C[lanes], self.sig_v[lanes], self.sig_p[lanes])
+        C0, v0, p0 = (x[:, sigma] for x in sigmas)
         if np.ndim(t) == 2:
-            q0, v0, p0 = q0[:, None], v0[:, None], p0[:, None]
-        q = quat_multiply(q0, D_rel[..., None, :])
-        v = v0 + quat_rotate(q0, A_rel[..., None, :])
+            C0, v0, p0 = C0[:, None], v0[:, None], p0[:, None]
+        C = np.matmul(C0, D_rel[..., None, :, :])
+        rot = np.matmul(C0, AB_rel[..., None, :, :])  # C₀ [A B]
+        v = v0 + rot[..., 0]
         v[..., 2] -= self.config.g * tau[..., None]
-        p = p0 + v0 * tau[..., None, None] + quat_rotate(q0, B_rel[..., None, :])
+        p = p0 + v0 * tau[..., None, None] + rot[..., 1]
         p[..., 2] -= 0.5 * self.config.g * (tau * tau)[..., None]
-        return q, v, p
+        return C, v, p
 
     def _freeze(self, idx: NDArray[np.integer]) -> None:
         """Declare walkers diverged: they stay at their last posterior (finite)."""
@@ -650,7 +661,7 @@ class ZuptUkf:
                 later, np.einsum("s,btsd->btd", self.weights.Wm, p), positions[lanes]
             )
             if states is not None:
-                sig = nav_to_state(q, v, p)
+                sig = dcm_to_state(q, v, p)
                 states[lanes] = np.where(later, state_mean(sig, self.weights.Wm), states[lanes])
         hold = t_all[None, :] >= diverged_at[:, None]  # held at the frozen posterior
         if hold.any():
@@ -662,7 +673,7 @@ class ZuptUkf:
     def _update(
         self,
         idx: NDArray[np.integer],
-        sig_q: Array,
+        sig_C: Array,
         sig_v: Array,
         sig_p: Array,
         elapsed_s: Array,
@@ -672,7 +683,7 @@ class ZuptUkf:
         """ZUPT of walkers ``idx`` from their propagated sigma points; redraws them."""
         c = self.config
         W = self.weights
-        sig = nav_to_state(sig_q, sig_v, sig_p)
+        sig = dcm_to_state(sig_C, sig_v, sig_p)
         Q = process_noise(c.assumed_imu, self.rate_hz, elapsed_s, self.process_noise_scale[idx])
         x_prior, P_prior = prior_moments(sig, W, Q)
         b = len(idx)
@@ -712,7 +723,7 @@ class ZuptUkf:
     # ------------------------------------------------------------------ queries
     def mean_state(self) -> Array:
         """Mean state ``(N, 9)`` of the propagated sigma points (no Q added)."""
-        sig = nav_to_state(self.sig_q, self.sig_v, self.sig_p)
+        sig = dcm_to_state(self.sig_C, self.sig_v, self.sig_p)
         return state_mean(sig, self.weights.Wm)
 
     def mean_position(self) -> Array:
