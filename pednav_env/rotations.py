@@ -66,9 +66,10 @@ def euler_to_dcm(euler: ArrayLike) -> Array:
     ``C_nb = B_zxᵀ`` with paper 003's elementary rotations B(γ), B(θ), B(ψ).
     """
     e = np.asarray(euler, dtype=float)
-    cy, sy = np.cos(e[..., 0]), np.sin(e[..., 0])
-    cp, sp = np.cos(e[..., 1]), np.sin(e[..., 1])
-    cr, sr = np.cos(e[..., 2]), np.sin(e[..., 2])
+    c, s = np.cos(e), np.sin(e)  # one call each for the three angles
+    cy, sy = c[..., 0], s[..., 0]
+    cp, sp = c[..., 1], s[..., 1]
+    cr, sr = c[..., 2], s[..., 2]
     C = np.empty(e.shape[:-1] + (3, 3))
     C[..., 0, 0] = cy * cp
     C[..., 0, 1] = cy * sp * sr - sy * cr

@@ -107,6 +107,14 @@ def state_mean(sigmas: Array, Wm: Array) -> Array:
     return state_add(ref, np.einsum("s,...sd->...d", Wm, d))
 
 
+def _wrap_angles_inplace(y: Array) -> None:
+    """Wrap the angle entries of states ``(..., 9)`` into [−π, π), in place;
+    a no-op check when they already are (the usual case for residuals)."""
+    a = y[..., ANGLES]
+    if a.size and (a.max() >= np.pi or a.min() < -np.pi):
+        y[..., ANGLES] = wrap_angle(a)
+
+
 def prior_moments(sigmas: Array, weights: MerweWeights, Q: Array) -> tuple[Array, Array]:
     """Unscented transform of sigma points ``(B, S, 9)`` with wrapped angles,
     plus process noise: the same mean and covariance as
@@ -115,12 +123,12 @@ def prior_moments(sigmas: Array, weights: MerweWeights, Q: Array) -> tuple[Array
     central point computed once."""
     ref = sigmas[:, 0, :]
     d = sigmas - ref[:, None, :]
-    d[..., ANGLES] = wrap_angle(d[..., ANGLES])
+    _wrap_angles_inplace(d)
     mean_d = np.matmul(weights.Wm, d)
     x = ref + mean_d
-    x[..., ANGLES] = wrap_angle(x[..., ANGLES])
+    _wrap_angles_inplace(x)
     y = d - mean_d[:, None, :]
-    y[..., ANGLES] = wrap_angle(y[..., ANGLES])
+    _wrap_angles_inplace(y)
     P = np.matmul(np.swapaxes(y * weights.Wc[:, None], -1, -2), y) + Q
     return x, P
 
@@ -224,29 +232,49 @@ class ZuptUkfConfig:
         return MerweWeights(STATE_DIM, self.alpha, self.beta, self.kappa)
 
 
-def process_noise(spec: ImuSpec, rate_hz: float, elapsed_s: Array, scale: Array) -> Array:
-    """Q ``(B, 9, 9)`` for intervals ``elapsed_s`` ``(B,)`` (see module docstring)."""
-    tau = np.asarray(elapsed_s, dtype=float)
+def process_noise_basis(spec: ImuSpec, rate_hz: float) -> Array:
+    """Q(τ) = Σ_{p=1..4} τᵖ M_p: the constant matrices M_p ``(4, 9, 9)`` of the
+    process noise below (module docstring), a polynomial in the interval τ."""
     dt = 1.0 / rate_hz
     q_v = spec.accel_noise_std(rate_hz) ** 2 * dt
     q_th = spec.gyro_noise_std(rate_hz) ** 2 * dt
-    if spec.drift_model is DriftModel.PER_GAIT_STEP:
-        drift = (spec.gyro_step_drift_std * tau) ** 2
-    else:
-        drift = spec.gyro_step_drift_std**2 * dt * tau
-    ang = q_th * tau + drift + (spec.gyro_bias_std * tau) ** 2
-    ang = ang + spec.gyro_bias_rw_density**2 * tau**3 / 3
-    vv = q_v * tau + (spec.accel_bias_std * tau) ** 2 + spec.accel_bias_rw_density**2 * tau**3 / 3
-    xx = q_v * tau**3 / 3 + (0.5 * spec.accel_bias_std * tau**2) ** 2
-    xv = q_v * tau**2 / 2 + 0.5 * spec.accel_bias_std**2 * tau**3
-    Q = np.zeros(tau.shape + (STATE_DIM, STATE_DIM))
+    ba2, bg2 = spec.accel_bias_std**2, spec.gyro_bias_std**2
+    drift2 = spec.gyro_step_drift_std**2
+    per_step = spec.drift_model is DriftModel.PER_GAIT_STEP
+    # coefficients of τ, τ², τ³, τ⁴
+    ang = (
+        q_th + (0.0 if per_step else drift2 * dt),
+        bg2 + (drift2 if per_step else 0.0),
+        spec.gyro_bias_rw_density**2 / 3,
+        0.0,
+    )
+    vv = (q_v, ba2, spec.accel_bias_rw_density**2 / 3, 0.0)
+    xx = (0.0, 0.0, q_v / 3, ba2 / 4)
+    xv = (0.0, q_v / 2, ba2 / 2, 0.0)
+    M = np.zeros((4, STATE_DIM, STATE_DIM))
     i3 = np.arange(3)
-    Q[:, i3, i3] = xx[:, None]
-    Q[:, i3 + 3, i3 + 3] = vv[:, None]
-    Q[:, i3, i3 + 3] = xv[:, None]
-    Q[:, i3 + 3, i3] = xv[:, None]
-    Q[:, i3 + 6, i3 + 6] = ang[:, None]
-    return Q * np.asarray(scale, dtype=float)[:, None, None]
+    for p in range(4):
+        M[p, i3, i3] = xx[p]
+        M[p, i3 + 3, i3 + 3] = vv[p]
+        M[p, i3, i3 + 3] = M[p, i3 + 3, i3] = xv[p]
+        M[p, i3 + 6, i3 + 6] = ang[p]
+    return M
+
+
+def process_noise(
+    spec: ImuSpec,
+    rate_hz: float,
+    elapsed_s: Array,
+    scale: Array,
+    basis: Array | None = None,
+) -> Array:
+    """Q ``(B, 9, 9)`` for intervals ``elapsed_s`` ``(B,)`` (see module docstring);
+    ``basis`` = :func:`process_noise_basis` of the same spec, if computed ahead."""
+    tau = np.asarray(elapsed_s, dtype=float)
+    if basis is None:
+        basis = process_noise_basis(spec, rate_hz)
+    powers = tau[:, None] ** np.arange(1, 5) * np.asarray(scale, dtype=float)[:, None]
+    return np.matmul(powers, basis.reshape(4, -1)).reshape(tau.shape + (STATE_DIM, STATE_DIM))
 
 
 @dataclass
@@ -287,9 +315,9 @@ def _diverging(C: Array, v: Array, p: Array) -> NDArray[np.bool_]:
 
 
 def state_to_dcm(y: Array) -> tuple[Array, Array, Array]:
-    """(C_nb, v, x) from state vectors ``(..., 9)`` (the engine's sigma-point form)."""
-    euler = np.stack((y[..., 8], y[..., 6], y[..., 7]), axis=-1)
-    return euler_to_dcm(euler), y[..., 3:6].copy(), y[..., 0:3].copy()
+    """(C_nb, v, x) from state vectors ``(..., 9)`` (the engine's sigma-point form;
+    v and x are views into ``y``)."""
+    return euler_to_dcm(y[..., [8, 6, 7]]), y[..., 3:6], y[..., 0:3]
 
 
 def dcm_to_state(C_nb: Array, vel_n: Array, pos_n: Array) -> Array:
@@ -343,6 +371,11 @@ class ZuptUkf:
         self.dt = 1.0 / self.rate_hz
         self.n = int(num_walkers)
         self.weights = config.weights
+        self.q_basis = process_noise_basis(config.assumed_imu, self.rate_hz)
+        #: R at zupt_noise_scale = 1: diag(σ_h², σ_v², σ_v², σ_v²).
+        self.zupt_noise_base = np.diag(
+            np.array([config.zupt_height_std] + [config.zupt_velocity_std] * 3) ** 2
+        )
         self.num_sigmas = 2 * STATE_DIM + 1
         self.detector = OnlineStanceDetector(config.detector, self.rate_hz, self.n)
         self.uses_shoe = isinstance(config.detector, ShoeDetectorConfig)
@@ -515,20 +548,19 @@ class ZuptUkf:
             shoe_cond = np.asarray(shoe_statistic) <= self.shoe_threshold[:, None]
         else:
             omega_norm = np.sqrt(np.einsum("nki,nki->nk", omega_c, omega_c))
-            # f'_x3 at sample j = e₃ᵀ C(q_c,j) f_mid_j = rows_j · F_j, rows from the
+            # f'_x3 at sample j = e₃ᵀ C_c,j f_mid,j = r · F_j, with the row r from the
             # central sigma point's attitude at the walker's last redraw.
-            rows = np.empty((n, k, 3))
-            rows[:] = _vertical_row(self.sig_C[:, 0], pre.D[:, 0])[:, None, :]
+            r = _vertical_row(self.sig_C[:, 0], pre.D[:, 0])
+            f_n3 = np.matmul(pre.F, r[:, :, None])[..., 0]
         todo = np.arange(n)
         while todo.size:
             if self.uses_shoe:
                 res = det.evaluate_condition(todo, shoe_cond[todo], self.min_stance_s[todo])
             else:
-                f_n3 = np.einsum("bkd,bkd->bk", rows[todo], pre.F[todo])
                 res = det.evaluate_threshold(
                     todo,
                     omega_norm[todo],
-                    f_n3,
+                    f_n3[todo],
                     self.omega_max[todo],
                     self.delta_f_max[todo],
                     self.min_stance_s[todo],
@@ -552,7 +584,11 @@ class ZuptUkf:
                 if idx.size == 0:
                     break
             elapsed = anchor_elapsed[idx] + (e - anchor[idx]) * dt
-            kinds = np.where(start[idx, e], "start", np.where(end[idx, e], "end", "stance"))
+            kinds = (
+                np.where(start[idx, e], "start", np.where(end[idx, e], "end", "stance"))
+                if self.record_updates
+                else None
+            )
             accepted, nis = self._update(idx, q, v, p, elapsed, kinds, self.sample[idx] + e)
             anchor[idx], anchor_elapsed[idx], next_from[idx] = e, 0.0, e + 1
             nis_log_sum[idx] += np.where(accepted, np.log1p(nis), 0.0)
@@ -561,9 +597,11 @@ class ZuptUkf:
             if record is not None:
                 anchors.append((idx, e.copy(), self.sig_C[idx], self.sig_v[idx], self.sig_p[idx]))
             if not self.uses_shoe:
+                # samples after the ZUPT see the corrected attitude
                 r = _vertical_row(self.sig_C[idx, 0], pre.D[idx, e])
                 later = kidx[None, :] > e[:, None]
-                rows[idx] = np.where(later[..., None], r[:, None, :], rows[idx])
+                f_new = np.matmul(pre.F[idx], r[:, :, None])[..., 0]
+                f_n3[idx] = np.where(later, f_new, f_n3[idx])
             todo = idx
         det.run[:], det.history[:], det.count[:] = run_end, hist_end, count_end
         det.in_stance[:] = stance[:, -1]
@@ -579,10 +617,9 @@ class ZuptUkf:
             lanes = all_lanes[live]
             # every sample after the last ZUPT: first non-finite or too fast state
             open_ = lanes[diverged_at[lanes] > k]
-            t = np.broadcast_to(np.arange(1, k + 1), (open_.size, k))
-            q, v, p = self._sigmas_at(open_, anchor[open_], t, pre, sigma=slice(0, 1))
-            bad = _diverging(q[..., 0, :, :], v[..., 0, :], p[..., 0, :])
-            bad &= t > anchor[open_, None]
+            v, p = self._central_track(open_, anchor[open_], pre)
+            bad = _diverging(self.sig_C[open_, None, 0], v, p)
+            bad &= np.arange(1, k + 1)[None, :] > anchor[open_, None]
             hit = bad.any(axis=1)
             diverged_at[open_[hit]] = bad[hit].argmax(axis=1) + 1
             q, v, p = self._sigmas_at(lanes, anchor[lanes], np.full(lanes.size, k), pre)
@@ -632,6 +669,27 @@ class ZuptUkf:
         p[..., 2] -= 0.5 * self.config.g * (tau * tau)[..., None]
         return C, v, p
 
+    def _central_track(
+        self, lanes: NDArray[np.integer], anchor: NDArray[np.integer], pre: Preintegrals
+    ) -> tuple[Array, Array]:
+        """Velocity and position ``(B, K, 3)`` of the central sigma point after each
+        sample of the block, moved from the redraw at ``anchor``: the attitude
+        products C_c D_aᵀ are formed once per walker, not per sample."""
+        k = pre.F.shape[1]
+        dt, g = self.dt, self.config.g
+        Da, Aa, Ba = pre.D[lanes, anchor], pre.A[lanes, anchor], pre.B[lanes, anchor]
+        M_T = np.swapaxes(np.matmul(self.sig_C[lanes, 0], np.swapaxes(Da, -1, -2)), -1, -2)
+        steps = np.arange(1, k + 1)[None, :] - anchor[:, None]
+        tau = steps * pre.tau_rate[lanes, None]
+        dA = pre.A[lanes, 1:] - Aa[:, None]
+        dB = pre.B[lanes, 1:] - Ba[:, None] - Aa[:, None] * (steps * dt)[..., None]
+        v0, p0 = self.sig_v[lanes, 0, None], self.sig_p[lanes, 0, None]
+        v = v0 + np.matmul(dA, M_T)
+        v[..., 2] -= g * tau
+        p = p0 + v0 * tau[..., None] + np.matmul(dB, M_T)
+        p[..., 2] -= 0.5 * g * tau * tau
+        return v, p
+
     def _freeze(self, idx: NDArray[np.integer]) -> None:
         """Declare walkers diverged: they stay at their last posterior (finite)."""
         self.diverged[idx] = True
@@ -677,33 +735,27 @@ class ZuptUkf:
         sig_v: Array,
         sig_p: Array,
         elapsed_s: Array,
-        kinds: NDArray[np.str_],
+        kinds: NDArray[np.str_] | None,
         sample: NDArray[np.integer],
     ) -> tuple[NDArray[np.bool_], Array]:
         """ZUPT of walkers ``idx`` from their propagated sigma points; redraws them."""
         c = self.config
         W = self.weights
         sig = dcm_to_state(sig_C, sig_v, sig_p)
-        Q = process_noise(c.assumed_imu, self.rate_hz, elapsed_s, self.process_noise_scale[idx])
-        x_prior, P_prior = prior_moments(sig, W, Q)
-        b = len(idx)
-        z = np.zeros((b, 4))
-        z[:, 0] = self.height_ref[idx]
-        r = (
-            np.array(
-                [c.zupt_height_std, c.zupt_velocity_std, c.zupt_velocity_std, c.zupt_velocity_std]
-            )
-            ** 2
+        Q = process_noise(
+            c.assumed_imu, self.rate_hz, elapsed_s, self.process_noise_scale[idx], self.q_basis
         )
-        R = np.zeros((b, 4, 4))
-        R[:, np.arange(4), np.arange(4)] = r[None, :] * self.zupt_noise_scale[idx, None]
+        x_prior, P_prior = prior_moments(sig, W, Q)
+        z = np.zeros((len(idx), 4))
+        z[:, 0] = self.height_ref[idx]
+        R = self.zupt_noise_base * self.zupt_noise_scale[idx, None, None]
         # h is linear: the update on prior sigma points is the Kalman update (update_linear).
         res = update_linear(x_prior, P_prior, MEASURED, z, R, state_add, self.gate_nis)
         self.updates[idx] += res.accepted
         self.rejected[idx] += ~res.accepted
         self.last_nis[idx] = res.nis
         self.set_state(idx, res.x, res.P)
-        if self.record_updates:
+        if kinds is not None:
             for j, w in enumerate(idx):
                 self.history.append(
                     UpdateRecord(
