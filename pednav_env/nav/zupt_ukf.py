@@ -9,12 +9,24 @@ start and stance end (eq 5 or SHOE) with
     h(y) = [x₃, v₁, v₂, v₃],   z = [x₃(t₀), 0, 0, 0]   (flat ground, zero velocity).
 
 One engine for every walker: :class:`ZuptUkf` holds the sigma points of N
-walkers, ``(N, 2L+1, ·)``, and :meth:`ZuptUkf.step` advances all of them by
-one IMU sample in a single chain of numpy calls. Walkers whose stance starts
-or ends at that sample get their prediction closed (unscented transform plus
-process noise for the elapsed interval) and their ZUPT update, together, as
-one batched update; the others keep integrating. No Python loop runs over
-walkers or sigma points.
+walkers, ``(N, 2L+1, ·)``, and :meth:`ZuptUkf.advance` moves all of them
+through a block of K IMU samples (one decision interval of the env). Between
+two ZUPTs a walker's sigma points only follow the strapdown, which is affine
+in the starting state, so they are moved from their last redraw straight to
+the next ZUPT by preintegrated increments of the walker's IMU record
+(:mod:`pednav_env.nav.preintegration`), not sample by sample. The ZUPTs run
+in rounds: every walker's first detected stance start or end of the block,
+as one batched unscented update, then every walker's second, and so on; after
+each round the detector is re-evaluated for the updated walkers, because
+eq (5) reads the vertical specific force through the corrected attitude.
+No Python loop runs over walkers or sigma points; :meth:`ZuptUkf.step` is
+the same call with K = 1, and the result depends on the blocking only
+through rounding (tested).
+
+Divergence (a non-finite state or a speed above :data:`DIVERGENCE_SPEED` of
+the central sigma point) is checked on the prior of every ZUPT and at every
+sample after a walker's last ZUPT of the block; a diverged walker gets no more
+ZUPTs and is frozen at its last posterior.
 
 Choices the paper leaves open (docs/REPRODUCTION.md):
 
