@@ -219,11 +219,11 @@ def update_linear(
         S = P_prior[:, m[:, None], m[None, :]] + R
         Pxz = P_prior[:, :, m]
         y = z - x_prior[:, m]
-    # One solve for S⁻¹ [P_xzᵀ | y]: Kᵀ = S⁻¹ P_xzᵀ (S symmetric) and S⁻¹ y.
-    n = P_prior.shape[-1]
-    sol = np.linalg.solve(S, np.concatenate((np.swapaxes(Pxz, -1, -2), y[..., None]), axis=-1))
-    KT = sol[..., :n]
-    nis = np.einsum("bi,bi->b", y, sol[..., n])
+    # S⁻¹ once (as filterpy does), then Kᵀ = S⁻¹ P_xzᵀ (S symmetric) and S⁻¹ y.
+    SI = np.linalg.inv(S)
+    KT = np.matmul(SI, np.swapaxes(Pxz, -1, -2))
+    # elementwise products and sums: the same rounding whatever the batch size
+    nis = ((SI * y[:, None, :]).sum(axis=-1) * y).sum(axis=-1)
     accepted = np.ones(len(y), dtype=bool) if gate_nis is None else nis <= gate_nis
     Ky = np.matmul(y[:, None, :], KT)[:, 0] * accepted[:, None]
     x = x_prior + Ky if add_x is None else add_x(x_prior, Ky)

@@ -286,7 +286,8 @@ def process_noise(
     if basis is None:
         basis = process_noise_basis(spec, rate_hz)
     powers = tau[:, None] ** np.arange(1, 5) * np.asarray(scale, dtype=float)[:, None]
-    return np.matmul(powers, basis.reshape(4, -1)).reshape(tau.shape + (STATE_DIM, STATE_DIM))
+    # elementwise, not a BLAS product: a walker's Q must not depend on the batch size
+    return (powers[:, :, None, None] * basis).sum(axis=1)
 
 
 @dataclass
@@ -673,8 +674,8 @@ class ZuptUkf:
         C0, v0, p0 = (x[:, sigma] for x in sigmas)
         if np.ndim(t) == 2:
             C0, v0, p0 = C0[:, None], v0[:, None], p0[:, None]
-        C = np.matmul(C0, D_rel[..., None, :, :])
-        rot = np.matmul(C0, AB_rel[..., None, :, :])  # C₀ [A B]
+        moved = np.matmul(C0, np.concatenate((D_rel, AB_rel), axis=-1)[..., None, :, :])
+        C, rot = moved[..., :3], moved[..., 3:]  # C₀ D and C₀ [A B]: one matmul
         v = v0 + rot[..., 0]
         v[..., 2] -= self.config.g * tau[..., None]
         p = p0 + v0 * tau[..., None, None] + rot[..., 1]
