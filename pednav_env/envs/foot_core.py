@@ -159,7 +159,7 @@ def generate_episode(config: FootZuptConfig, rng: np.random.Generator) -> Episod
         route = random_route(rng, config.route)
         w = np.asarray(config.imu_grade_weights, dtype=float)
         grade = config.imu_grades[int(rng.choice(len(w), p=w / w.sum()))]
-    truth = simulate_foot(route, sim)
+    truth = simulate_foot(route, sim, full_state=False)
     imu = simulate_imu(
         truth.omega_b,
         truth.f_b,

@@ -14,7 +14,7 @@ A route is a sequence of :class:`Stride` records; the simulator
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from enum import IntEnum
 
 import numpy as np
@@ -94,6 +94,15 @@ class StrideShape:
         if (self.toe_off_pitch is None) != (self.heel_strike_pitch is None):
             raise ValueError("StrideShape.toe_off_pitch and heel_strike_pitch are set together")
 
+    @classmethod
+    def _drawn(cls, **values: float | Gait) -> StrideShape:
+        """A shape from values inside the validated ranges by construction (the
+        draws of :func:`random_route`), without ``__post_init__``'s checks: they
+        were most of the time of drawing a route."""
+        shape = object.__new__(cls)
+        shape.__dict__.update(_SHAPE_DEFAULTS, **values)
+        return shape
+
     @property
     def cycle_s(self) -> float:
         """Gait cycle T₀ + T₁ + T₂ + T₃ (s)."""
@@ -103,6 +112,9 @@ class StrideShape:
     def speed(self) -> float:
         """Mean walking speed (m/s)."""
         return self.stride_length_m / self.cycle_s
+
+
+_SHAPE_DEFAULTS = {f.name: f.default for f in fields(StrideShape)}
 
 
 @dataclass(frozen=True)
@@ -226,39 +238,84 @@ class RouteRandomization:
             raise ValueError(f"RouteRandomization.gait_weights invalid: {self.gait_weights}")
 
 
+#: Draws of one stride shape, in order: (low, high) of each ``rng.uniform``.
+#: Walking gaits draw the (length, cycle) ranges of all three walking classes
+#: and keep their own pair, then the stance fraction a and the noise of the
+#: swing height, toe-off pitch, mid-swing pitch and roll.
+_WALK_DRAWS = (
+    (0.4, 0.8),
+    (1.2, 1.5),
+    (0.8, 1.2),
+    (1.0, 1.2),
+    (1.2, 1.4),
+    (0.85, 1.0),
+    (0.30, 0.38),
+    (-0.01, 0.01),
+    (-0.05, 0.05),
+    (-0.1, 0.2),
+    (-0.05, 0.05),
+)
+_WALK_COLUMNS = {Gait.SLOW_WALK: 0, Gait.WALK: 2, Gait.FAST_WALK: 4}
+#: Running: length, cycle, stance fraction, swing height, toe-off and
+#: heel-strike pitch, mid-swing pitch and roll.
+_RUN_DRAWS = (
+    (1.6, 2.4),
+    (0.65, 0.8),
+    (0.08, 0.12),
+    (0.2, 0.3),
+    (0.6, 0.8),
+    (0.15, 0.3),
+    (-0.1, 0.2),
+    (-0.05, 0.05),
+)
+
+
+def _random_stride_shapes(rng: np.random.Generator, gait: Gait, n: int) -> list[StrideShape]:
+    """Draw ``n`` realistic stride shapes for ``gait`` (ranges in RouteRandomization).
+
+    The same draws, in the same order, as ``n`` calls of
+    :func:`random_stride_shape`, made in one ``rng.uniform`` call.
+    """
+    ranges = np.array(_RUN_DRAWS if gait is Gait.RUN else _WALK_DRAWS)
+    u = rng.uniform(ranges[:, 0], ranges[:, 1], size=(n, len(ranges))).tolist()
+    shapes = []
+    for row in u:
+        if gait is Gait.RUN:
+            length, cycle, stance_frac, height, toe_off, heel_strike, pitch, roll = row
+            heel_frac = 0.10
+            t0, t1 = stance_frac * cycle, heel_frac * cycle
+            t2 = cycle - t0 - 2 * t1
+            heel_strike = -heel_strike
+        else:
+            j = _WALK_COLUMNS[gait]
+            length, cycle = row[j], row[j + 1]
+            a, d_height, d_toe_off, pitch, roll = row[6:]
+            # T0 = T2 = a·cycle, T1 = T3 = (0.5 − a)·cycle (paper 003 symmetry)
+            t0, t1, t2 = a * cycle, (0.5 - a) * cycle, a * cycle
+            speed = length / cycle
+            height = 0.06 + 0.04 * speed + d_height
+            toe_off, heel_strike = 0.4 + 0.3 * speed + d_toe_off, -(0.2 + 0.1 * speed)
+        shapes.append(
+            StrideShape._drawn(
+                stride_length_m=length,
+                stance_s=t0,
+                heel_off_s=t1,
+                swing_s=t2,
+                heel_strike_s=t1,
+                swing_height_m=height,
+                mid_swing_pitch=pitch,
+                mid_swing_roll=roll,
+                toe_off_pitch=toe_off,
+                heel_strike_pitch=heel_strike,
+                gait=gait,
+            )
+        )
+    return shapes
+
+
 def random_stride_shape(rng: np.random.Generator, gait: Gait) -> StrideShape:
     """Draw a realistic stride shape for ``gait`` (ranges in RouteRandomization)."""
-    u = rng.uniform
-    if gait is Gait.RUN:
-        length, cycle = u(1.6, 2.4), u(0.65, 0.8)
-        stance_frac, heel_frac = u(0.08, 0.12), 0.10
-        t0, t1 = stance_frac * cycle, heel_frac * cycle
-        t2 = cycle - t0 - 2 * t1
-        height, toe_off, heel_strike = u(0.2, 0.3), u(0.6, 0.8), -u(0.15, 0.3)
-    else:
-        length, cycle = {
-            Gait.SLOW_WALK: (u(0.4, 0.8), u(1.2, 1.5)),
-            Gait.WALK: (u(0.8, 1.2), u(1.0, 1.2)),
-            Gait.FAST_WALK: (u(1.2, 1.4), u(0.85, 1.0)),
-        }[gait]
-        a = u(0.30, 0.38)  # T0 = T2 = a·cycle, T1 = T3 = (0.5 − a)·cycle (paper 003 symmetry)
-        t0, t1, t2 = a * cycle, (0.5 - a) * cycle, a * cycle
-        speed = length / cycle
-        height = 0.06 + 0.04 * speed + u(-0.01, 0.01)
-        toe_off, heel_strike = 0.4 + 0.3 * speed + u(-0.05, 0.05), -(0.2 + 0.1 * speed)
-    return StrideShape(
-        stride_length_m=length,
-        stance_s=t0,
-        heel_off_s=t1,
-        swing_s=t2,
-        heel_strike_s=t1,
-        swing_height_m=height,
-        mid_swing_pitch=u(-0.1, 0.2),
-        mid_swing_roll=u(-0.05, 0.05),
-        toe_off_pitch=toe_off,
-        heel_strike_pitch=heel_strike,
-        gait=gait,
-    )
+    return _random_stride_shapes(rng, gait, 1)[0]
 
 
 def random_route(rng: np.random.Generator, config: RouteRandomization | None = None) -> Route:
@@ -281,8 +338,7 @@ def random_route(rng: np.random.Generator, config: RouteRandomization | None = N
         n_turn = max(1, math.ceil(abs(turn_total) / cfg.max_turn_per_stride))
         stop = rng.uniform(*cfg.stop_s) if rng.uniform() < cfg.stop_probability else 0.0
         leg = []
-        for i in range(n_leg):
-            shape = random_stride_shape(rng, gait)
+        for i, shape in enumerate(_random_stride_shapes(rng, gait, n_leg)):
             turn = turn_total / n_turn if i < n_turn else 0.0
             leg.append(Stride(shape, heading_change=turn, stop_s=stop if i == 0 else 0.0))
         for s in leg:

@@ -255,6 +255,41 @@ def _error_matrix(rng: np.random.Generator, scale_std: float, misalignment_std: 
     return (np.eye(3) + np.diag(scale)) @ M
 
 
+def _add_bias_random_walk(rng: np.random.Generator, step_std: float, draw: Array, x: Array) -> None:
+    """x += b_rw, the bias random walk b_rw(t_k) = Σ_{j≤k} σ ξ_j (ξ_j standard normal).
+
+    The draws (into ``draw``) are always made: the stream of later errors must
+    not depend on the densities. With ``step_std == 0`` the walk is exactly zero.
+    """
+    rng.standard_normal(draw.shape, out=draw)
+    if step_std != 0:
+        np.cumsum(draw, axis=0, out=draw)
+        draw *= step_std
+        x += draw
+
+
+def _apply_error_matrix(x: Array, K: Array) -> Array:
+    """K x for every row of ``x`` (T, 3); x itself when K is exactly the identity."""
+    if np.array_equal(K, np.eye(3)):
+        return x
+    return x @ K.T
+
+
+def _quantise(x: Array, lsb: float) -> None:
+    """x ← round(x / lsb) · lsb in place (nothing for lsb = 0)."""
+    if lsb > 0:
+        x /= lsb
+        np.round(x, out=x)
+        x *= lsb
+
+
+def _saturate(x: Array, limit: float, flags: NDArray[np.bool_]) -> None:
+    """Clip ``x`` (T, 3) to ±limit in place; flag the samples with a component beyond."""
+    if math.isfinite(limit) and not (-limit <= x.min() and x.max() <= limit):
+        np.any(np.abs(x) > limit, axis=-1, out=flags)
+        np.clip(x, -limit, limit, out=x)
+
+
 def simulate_imu(
     omega_b: Array,
     f_b: Array,
@@ -304,6 +339,9 @@ def simulate_imu(
     dt = 1.0 / rate_hz
     omega_out = np.empty_like(omega_b)
     f_out = np.empty_like(f_b)
+    gyro_sat = np.zeros((n, t), dtype=bool)
+    accel_sat = np.zeros((n, t), dtype=bool)
+    draw = np.empty((t, 3))  # one record of draws at a time
     for i, (s, rng) in enumerate(zip(specs, gens, strict=True)):
         # Fixed draw order per walker: errors constant over the record first.
         K_w = _error_matrix(rng, s.gyro_scale_std, s.gyro_misalignment_std)
@@ -313,26 +351,27 @@ def simulate_imu(
         if s.drift_model is DriftModel.PER_GAIT_STEP:
             steps = gait_step_index[i] - gait_step_index[i].min()
             nu = rng.standard_normal((int(steps.max()) + 1, 3)) * s.gyro_step_drift_std
-            drift = nu[steps]
+            drift = np.take(nu, steps, axis=0)
         else:
-            drift = rng.standard_normal((t, 3)) * s.gyro_step_drift_std
-        rw_w = np.cumsum(rng.standard_normal((t, 3)), axis=0) * (s.gyro_bias_rw_density * dt**0.5)
-        rw_f = np.cumsum(rng.standard_normal((t, 3)), axis=0) * (s.accel_bias_rw_density * dt**0.5)
-        noise_w = rng.standard_normal((t, 3)) * s.gyro_noise_std(rate_hz)
-        noise_f = rng.standard_normal((t, 3)) * s.accel_noise_std(rate_hz)
-        omega_out[i] = omega_b[i] @ K_w.T + b_w + rw_w + drift + noise_w
-        f_out[i] = f_b[i] @ K_f.T + b_f + rw_f + noise_f
-
-    lsb_w = np.array([s.gyro_lsb for s in specs])[:, None, None]
-    lsb_f = np.array([s.accel_lsb for s in specs])[:, None, None]
-    omega_out = np.where(
-        lsb_w > 0, np.round(omega_out / np.where(lsb_w > 0, lsb_w, 1)) * lsb_w, omega_out
-    )
-    f_out = np.where(lsb_f > 0, np.round(f_out / np.where(lsb_f > 0, lsb_f, 1)) * lsb_f, f_out)
-    rng_w = np.array([s.gyro_range for s in specs])[:, None, None]
-    rng_f = np.array([s.accel_range for s in specs])[:, None, None]
-    gyro_sat = np.any(np.abs(omega_out) > rng_w, axis=-1)
-    accel_sat = np.any(np.abs(f_out) > rng_f, axis=-1)
-    omega_out = np.clip(omega_out, -rng_w, rng_w)
-    f_out = np.clip(f_out, -rng_f, rng_f)
+            drift = rng.standard_normal((t, 3))
+            drift *= s.gyro_step_drift_std
+        # ω' = (((K ω + b) + b_rw) + ν) + δω and f' = ((K f + b) + b_rw) + δf, the
+        # terms added in this order as they are drawn (b_rw, b_rw, δω, δf).
+        w, f = omega_out[i], f_out[i]
+        w[:] = _apply_error_matrix(omega_b[i], K_w)
+        f[:] = _apply_error_matrix(f_b[i], K_f)
+        for j in range(3):  # per axis: adding a (3,) row to (T, 3) is several times slower
+            w[:, j] += b_w[j]
+            f[:, j] += b_f[j]
+        _add_bias_random_walk(rng, s.gyro_bias_rw_density * dt**0.5, draw, w)
+        w += drift
+        _add_bias_random_walk(rng, s.accel_bias_rw_density * dt**0.5, draw, f)
+        for x, std in ((w, s.gyro_noise_std(rate_hz)), (f, s.accel_noise_std(rate_hz))):
+            rng.standard_normal(x.shape, out=draw)
+            draw *= std
+            x += draw
+        _quantise(w, s.gyro_lsb)
+        _quantise(f, s.accel_lsb)
+        _saturate(w, s.gyro_range, gyro_sat[i])
+        _saturate(f, s.accel_range, accel_sat[i])
     return ImuMeasurements(omega_out, f_out, rate_hz, gyro_sat, accel_sat)
