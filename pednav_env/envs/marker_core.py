@@ -41,6 +41,7 @@ Two things the thesis does not need for its 10 s walks are handled here:
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -109,24 +110,30 @@ def uwb_spec(condition: str, rate_hz: float, noise_factor: float = 1.0) -> UwbSp
     These magnitudes are illustrative (ours), not fitted to a data set.
     """
     sigma = 0.1 * noise_factor
-    if condition == "clean":
-        return UwbSpec(rate_hz=rate_hz, noise_std=sigma)
-    if condition == "noisy":
-        return UwbSpec(rate_hz=rate_hz, noise_std=2.5 * sigma)
+    return _condition_spec(condition, rate_hz).with_noise_std(
+        2.5 * sigma if condition == "noisy" else sigma
+    )
+
+
+@functools.lru_cache(maxsize=64)
+def _condition_spec(condition: str, rate_hz: float) -> UwbSpec:
+    """The spec of a condition but its σ, built and checked once (per episode
+    :func:`uwb_spec` only sets σ)."""
+    if condition in ("clean", "noisy"):
+        return UwbSpec(rate_hz=rate_hz)
     if condition == "nlos":
         return UwbSpec(
             rate_hz=rate_hz,
-            noise_std=sigma,
             nlos_start_rate_hz=0.3,
             nlos_mean_duration=1.5,
             nlos_drop_prob=0.3,
         )
     if condition == "outliers":
-        return UwbSpec(rate_hz=rate_hz, noise_std=sigma, outlier_prob=0.05)
+        return UwbSpec(rate_hz=rate_hz, outlier_prob=0.05)
     if condition == "dropouts":
-        return UwbSpec(rate_hz=rate_hz, noise_std=sigma, drop_prob=0.25)
+        return UwbSpec(rate_hz=rate_hz, drop_prob=0.25)
     if condition == "realistic":
-        return replace(UwbSpec.realistic(rate_hz), noise_std=sigma)
+        return UwbSpec.realistic(rate_hz)
     raise ValueError(f"uwb_conditions: unknown condition {condition!r}; known: {UWB_CONDITIONS}")
 
 
@@ -312,6 +319,12 @@ class Episode:
     uwb_condition: str
 
 
+@functools.lru_cache(maxsize=16)
+def _condition_cdf(weights: tuple[float, ...]) -> Array:
+    """Cumulative UWB condition weights, normalised (computed once per weights)."""
+    return np.cumsum(weights) / np.sum(weights)
+
+
 def generate_episode(
     config: MarkerTrackConfig, rng: np.random.Generator, gait: HeelKneeConfig | None = None
 ) -> Episode:
@@ -332,7 +345,7 @@ def generate_episode(
         spec = UwbSpec.paper(rate)
     else:
         k = max(2, round(rng.uniform(*config.duration_s) * rate))
-        cdf = np.cumsum(config.uwb_condition_weights) / np.sum(config.uwb_condition_weights)
+        cdf = _condition_cdf(tuple(config.uwb_condition_weights))
         pick = min(int(np.searchsorted(cdf, rng.random(), side="right")), len(cdf) - 1)
         condition = config.uwb_conditions[pick]
         spec = uwb_spec(condition, rate, rng.uniform(*config.noise_factor_range))
@@ -414,6 +427,7 @@ class MarkerTrackCore:
         self.tbuf = np.zeros((n, self.C, DIM_Z))
         self.g = 0  # global sample index of the next step's first sample
         self.ep_start = np.zeros(n, dtype=np.int64)
+        self.x_start = np.zeros(n)  # heel x at the episode's first sample
         self.length = np.ones(n, dtype=np.int64)
         self.cursor = np.zeros(n, dtype=np.int64)
         self.distance = np.zeros(n)
@@ -430,12 +444,19 @@ class MarkerTrackCore:
             [hi for _, _, hi in OBS_FEATURES] + [1.0] * config.action_dim, dtype=np.float32
         )
         self.obs = np.zeros((n, len(OBS_FEATURES) + config.action_dim), dtype=np.float32)
+        self._obs_low64 = self.obs_low.astype(np.float64)[:, None]
+        self._obs_high64 = self.obs_high.astype(np.float64)[:, None]
         self._prior_obs: NDArray[np.float32] | None = None
         self._abs_p0 = np.abs(config.filter.nominal.vector)[:, None]
         self._log10_abs_p0 = np.log10(self._abs_p0)
         self._qgroup = np.asarray(Q_GROUP)
         self._knob_base = np.array([base for _, base, _, _ in ACTION_KNOBS])
         self._knob_log_span = np.log([span for _, _, span, _ in ACTION_KNOBS])
+        # q and r of action 0 (what _apply_action sets for a lane after reset)
+        rest = self._knob_base * np.exp(np.zeros(config.action_dim) * self._knob_log_span)
+        self._q_rest = self.engine.q0 * rest[self._qgroup]
+        self._r_rest = self.engine.r0 * rest[3]
+        self._scale_buf = np.empty((config.action_dim, n))
         #: The last interval, (k, 4, N): estimates, truth, innovations, validity.
         self.interval_est = np.zeros((self.k, DIM_Z, n))
         self.interval_truth = np.zeros((self.k, DIM_Z, n))
@@ -452,11 +473,13 @@ class MarkerTrackCore:
             head = min(t, self.C - g0)  # the walk wraps around the buffer's end
             for buf, data in (
                 (self.zbuf, ep.z),
-                (self.vbuf, ep.valid[:, (0, 0, 1, 1)]),
+                (self.vbuf, np.repeat(ep.valid, 2, axis=1)),  # per marker → per coordinate
                 (self.tbuf, ep.truth),
             ):
                 buf[lane, g0 : g0 + head] = data[:head]
-                buf[lane, : t - head] = data[head:]
+                if head < t:
+                    buf[lane, : t - head] = data[head:]
+            self.x_start[lane] = ep.truth[0, 0]
             self.length[lane] = t
             self.condition[lane] = ep.uwb_condition
         self.engine.reset(lanes)
@@ -467,7 +490,8 @@ class MarkerTrackCore:
         self.clipped[lanes] = 0
         self.reanchors[lanes] = 0
         self.last_error[lanes] = 0.0
-        self._apply_action(lanes)
+        self.engine.q[:, lanes] = self._q_rest[:, None]  # _apply_action(lanes) at action 0
+        self.engine.r[:, lanes] = self._r_rest
         if self._prior_obs is None:  # the same for every lane: no data, prior P, action 0
             self._prior_obs = self._features(lanes[:1], None)[0]
         self.obs[lanes] = self._prior_obs
@@ -487,11 +511,17 @@ class MarkerTrackCore:
         """Knob values base · span**a = base · exp(a ln span), ``(k, B)``."""
         return (self._knob_base * np.exp(self.action[lanes] * self._knob_log_span)).T
 
-    def _apply_action(self, lanes: NDArray[np.integer] | slice) -> None:
-        scales = self._scales(lanes)
+    def _apply_action(self) -> None:
+        """Set every lane's Q and R diagonals from its action (knob-major, so that
+        each operation runs along the lanes: the numbers of :meth:`_scales`)."""
         e = self.engine
-        e.q[:, lanes] = e.q0[:, None] * scales[self._qgroup]
-        e.r[:, lanes] = e.r0 * scales[3]
+        scales = self._scale_buf
+        scales[...] = self.action.T
+        scales *= self._knob_log_span[:, None]
+        np.exp(scales, out=scales)
+        scales *= self._knob_base[:, None]
+        np.multiply(e.q0[:, None], scales[self._qgroup], out=e.q)
+        np.multiply(e.r0, scales[3], out=e.r)
 
     def knob_values(self) -> dict[str, Array]:
         """Current physical value of every knob, per lane."""
@@ -504,7 +534,7 @@ class MarkerTrackCore:
         a = self.validate_action(action)
         self.clipped += np.any(np.abs(a) > 1.0, axis=1)
         self.action = np.clip(a, -1.0, 1.0)
-        self._apply_action(slice(None))
+        self._apply_action()
         e, k, c = self.engine, self.k, self.config
         base = self.g - self.ep_start  # episode sample index of the first slot
         used = np.clip(self.length - base, 0, k)
@@ -513,9 +543,10 @@ class MarkerTrackCore:
         sidx = base[None, :] + np.arange(k)[:, None]  # (k, N)
         active = (sidx < self.length) & (sidx >= 0)
         z = np.ascontiguousarray(self.zbuf[:, sl].transpose(1, 2, 0))  # (k, 4, N)
-        truth = np.ascontiguousarray(self.tbuf[:, sl].transpose(1, 2, 0))
-        raw_valid = np.ascontiguousarray(self.vbuf[:, sl].transpose(1, 2, 0))
-        valid = raw_valid & active[:, None, :]
+        truth = self.interval_truth  # (k, 4, N), the last interval's truth
+        truth[...] = self.tbuf[:, sl].transpose(1, 2, 0)
+        valid = np.empty((k, DIM_Z, self.n), dtype=bool)
+        np.logical_and(self.vbuf[:, sl].transpose(1, 2, 0), active[:, None, :], out=valid)
         times = sidx * self.T  # kT
         fresh = np.flatnonzero(base == 0)
         nu = np.empty((k, DIM_Z, self.n))
@@ -535,7 +566,6 @@ class MarkerTrackCore:
             sq = (est - truth) ** 2 * active[:, None, :]  # (k, 4, N)
             coord_ms = _sum_in_order(sq) / np.maximum(used, 1)  # (4, N)
             err = np.sqrt(coord_ms.mean(axis=0))
-        self.interval_truth[:] = truth
         self.interval_active[:] = active
         err = np.where(used > 0, err, self.last_error)
         self.cursor += used
@@ -544,7 +574,7 @@ class MarkerTrackCore:
         lanes = self.lanes
         self.distance = np.where(
             used > 0,
-            truth[j_last, 0, lanes] - self.tbuf[lanes, self.ep_start % self.C, 0],
+            truth[j_last, 0, lanes] - self.x_start,
             self.distance,
         )
         # divergence and lock loss (module docstring)
@@ -573,7 +603,8 @@ class MarkerTrackCore:
             "error_by_coord": np.sqrt(coord_ms.T),
             "distance": self.distance.copy(),
             "samples": used,
-            "dropped_samples": (~raw_valid & active[:, None, :]).sum(axis=(0, 1)) // 2,
+            # active coordinates not valid: 4 per active sample minus the valid ones
+            "dropped_samples": (4 * active.sum(axis=0) - valid.sum(axis=(0, 1))) // 2,
             "reanchors": self.reanchors.copy(),
             "clipped_actions": self.clipped.copy(),
             "covariance_repairs": e.repairs.copy(),
@@ -592,16 +623,19 @@ class MarkerTrackCore:
         due = ok & (t_now - e.t_anchor > c.reanchor_after_s)
         if not due.any():
             return
-        omega = e.p0[I_OMEGA, 0] + e.x[I_OMEGA]  # > 0 for lanes not diverged
-        c_x = e.p0[I_CX, 0] + e.x[I_CX]
-        span = t_now - c.reanchor_keep_s - e.t_anchor
+        idx = np.flatnonzero(due)  # the same operations as over all lanes, on these
+        omega = e.p0[I_OMEGA, 0] + e.x[I_OMEGA, idx]  # > 0 for lanes not diverged
+        t_anchor = e.t_anchor[idx]
+        span = t_now[idx] - c.reanchor_keep_s - t_anchor
         with np.errstate(all="ignore"):
             cycles = np.floor(omega * span / (2.0 * math.pi))
-            shift = np.where(due & (cycles >= 1), 2.0 * math.pi * cycles / omega, 0.0)
-        moved = shift > 0
-        e.x_anchor[:] = np.where(moved, e.x_anchor + c_x * shift, e.x_anchor)
-        e.t_anchor[:] = np.where(moved, e.t_anchor + shift, e.t_anchor)
-        self.reanchors += moved
+            shift = 2.0 * math.pi * cycles / omega
+        moved = (cycles >= 1) & (shift > 0)
+        idx, shift = idx[moved], shift[moved]
+        c_x = e.p0[I_CX, 0] + e.x[I_CX, idx]
+        e.x_anchor[idx] += c_x * shift
+        e.t_anchor[idx] = t_anchor[moved] + shift
+        self.reanchors[idx] += 1
 
     # ------------------------------------------------------------------ observation
     def _features(
@@ -633,9 +667,15 @@ class MarkerTrackCore:
             t_last = np.maximum(self.cursor[lanes] - 1, 0) * self.T
             out[24] = t_last - e.t_anchor[lanes]
             out[25:] = self.action[lanes].T
-            np.nan_to_num(out, copy=False, nan=0.0)
-        obs = out.T.astype(np.float32)
-        return np.clip(obs, self.obs_low, self.obs_high, out=obs)
+            # Clip to the bounds, NaN → 0: what nan_to_num and then clipping the
+            # float32 cast gives (±inf end at a bound either way, 0 is inside every
+            # range; the bounds are float32 numbers and rounding keeps the order).
+            np.maximum(out, self._obs_low64, out=out)  # NaN stays NaN
+            np.minimum(out, self._obs_high64, out=out)
+            nan = np.isnan(out)
+            if nan.any():
+                out[nan] = 0.0
+        return out.T.astype(np.float32)
 
 
 __all__ = [

@@ -403,14 +403,19 @@ def _check_rngs(rngs: Sequence[np.random.Generator]) -> None:
             raise ValueError(f"rngs[{i}] must be a numpy.random.Generator, got {rng!r}")
 
 
-def _gait_factors(
-    config: HeelKneeConfig, t: Array, rng: np.random.Generator
-) -> tuple[Array, Array]:
-    """Cadence and stride factors f_c(t), f_s(t) of one walker, shape (K,) each."""
-    f_c = np.ones_like(t)
-    f_s = np.ones_like(t)
+def _gait_factors_into(
+    config: HeelKneeConfig, t: Array, rng: np.random.Generator, out: Array
+) -> bool:
+    """Write f_c(t), f_s(t) of one walker into ``out`` (2, K), which holds ones.
+
+    Draws, in order: the Poisson change times (exponential gaps until the walk's
+    end), then per change its cadence and stride factors. Change i rules the
+    samples from its time up to the next change (t is ascending) with a linear
+    transition from the previous gait. Returns whether the walk changes gait
+    (else ``out`` is left at 1).
+    """
     if config.gait_change_rate_hz == 0.0 or t.size == 0:
-        return f_c, f_s
+        return False
     t_end = t[-1]
     times: list[float] = []
     now = 0.0
@@ -419,22 +424,61 @@ def _gait_factors(
         if now >= t_end:
             break
         times.append(now)
-    lo_c, hi_c = config.cadence_factor_range
-    lo_s, hi_s = config.stride_factor_range
-    old_c = old_s = 1.0
-    ramp_time = config.gait_transition_time
-    # Change i rules the samples from its time up to the next change (t is
-    # ascending), so each change writes only its own segment.
-    starts = np.searchsorted(t, times, side="left").tolist() + [t.size]
-    for i, t_change in enumerate(times):
-        new_c = rng.uniform(lo_c, hi_c)
-        new_s = rng.uniform(lo_s, hi_s)
-        seg = slice(starts[i], starts[i + 1])
-        w = np.clip((t[seg] - t_change) / ramp_time, 0.0, 1.0)
-        f_c[seg] = old_c + (new_c - old_c) * w
-        f_s[seg] = old_s + (new_s - old_s) * w
-        old_c, old_s = new_c, new_s
-    return f_c, f_s
+    if not times:
+        return False
+    m = len(times)
+    (lo_c, hi_c), (lo_s, hi_s) = config.cadence_factor_range, config.stride_factor_range
+    # one uniform per factor in the order (c, s) of each change: the same numbers
+    # as m pairs of scalar rng.uniform(lo, hi) calls (low + (high − low) · U each)
+    new = rng.uniform(np.array([lo_c, lo_s] * m), np.array([hi_c, hi_s] * m))
+    # per change: its time, the factor steps new − old and the old factors
+    table = np.empty((5, m))
+    table[0] = times
+    table[3:5, 0] = 1.0
+    table[3:5, 1:] = new[: 2 * m - 2].reshape(m - 1, 2).T
+    np.subtract(new.reshape(m, 2).T, table[3:5], out=table[1:3])
+    bounds = np.empty(m + 1, dtype=np.intp)
+    bounds[:m] = np.searchsorted(t, times, side="left")
+    bounds[m] = t.size
+    first = int(bounds[0])
+    # the change ruling each sample from the first change on (an empty segment,
+    # two changes between the same samples, rules no sample)
+    rule = np.repeat(table, bounds[1:] - bounds[:-1], axis=1)
+    w = t[first:] - rule[0]
+    w /= config.gait_transition_time
+    np.clip(w, 0.0, 1.0, out=w)
+    np.multiply(rule[1:3], w, out=out[:, first:])
+    out[:, first:] += rule[3:5]  # old + (new − old) w
+    return True
+
+
+@dataclass(frozen=True)
+class _SimConstants:
+    """What :func:`simulate_heel_knee` derives from its config (read only)."""
+
+    inertia: float  # d of eq 5.1
+    initial_std: Array  # (6,) √P0
+    step_std: Array  # (6, 1) std of Γκ per step
+    nominal: Array  # (6, 1) p⁰
+
+
+_SIM_CONSTANTS: dict[HeelKneeConfig, _SimConstants] = {}
+
+
+def _sim_constants(config: HeelKneeConfig) -> _SimConstants:
+    """:class:`_SimConstants` of ``config``, built once per config."""
+    const = _SIM_CONSTANTS.get(config)
+    if const is None:
+        if len(_SIM_CONSTANTS) > 64:
+            _SIM_CONSTANTS.clear()
+        proc = config.process
+        const = _SIM_CONSTANTS[config] = _SimConstants(
+            inertia=float(proc.F[0]),
+            initial_std=np.sqrt(proc.P0),
+            step_std=np.sqrt(proc.process_noise)[:, None],
+            nominal=config.nominal.vector[:, None],
+        )
+    return const
 
 
 def simulate_heel_knee(
@@ -456,7 +500,8 @@ def simulate_heel_knee(
     Returns
     -------
     HeelKneeWalk
-        Arrays shaped ``(N, K, ...)``.
+        Arrays shaped ``(N, K, ...)`` (``nominal`` and ``deviation`` are views
+        of parameter-major arrays).
     """
     if not isinstance(num_samples, (int, np.integer)) or num_samples < 1:
         raise ValueError(f"num_samples must be an integer >= 1, got {num_samples!r}")
@@ -464,42 +509,77 @@ def simulate_heel_knee(
     n_walkers, k_samples = len(rngs), int(num_samples)
     T = config.sample_period
     t = np.arange(k_samples) * T
-    proc = config.process
-    p0 = config.nominal.vector
-    step_std = np.sqrt(proc.process_noise)  # std of Γκ per step
+    const = _sim_constants(config)
+    stationary = config.initial_deviation == "stationary"
 
-    drive = np.empty((n_walkers, k_samples, 6))
-    f_c = np.ones((n_walkers, k_samples))
-    f_s = np.ones((n_walkers, k_samples))
+    drive = np.empty((n_walkers, k_samples, 6))  # the draws, filled in place
+    factors = np.ones((n_walkers, 2, k_samples))  # f_c, f_s
+    changes = False
     for i, rng in enumerate(rngs):
-        if config.initial_deviation == "stationary":
-            drive[i, 0] = np.sqrt(proc.P0) * rng.standard_normal(6)
+        if stationary:
+            rng.standard_normal(out=drive[i, 0])
         else:
             drive[i, 0] = 0.0  # eq 5.6: the walk starts at the nominal values
-        drive[i, 1:] = step_std * rng.standard_normal((k_samples - 1, 6))
-        f_c[i], f_s[i] = _gait_factors(config, t, rng)
+        rng.standard_normal(out=drive[i, 1:])
+        changes |= _gait_factors_into(config, t, rng, factors[i])
+    # From here on parameter-major (N, 6, K): every series is contiguous in time.
+    drive = np.ascontiguousarray(drive.transpose(0, 2, 1))
+    if stationary:
+        drive[..., 0] *= const.initial_std
+    drive[..., 1:] *= const.step_std  # std of Γκ per step
     # L(k) = d L(k−1) + Γκ(k): a first-order recursion along time (eq 4.11).
-    deviation = lfilter([1.0], [1.0, -proc.F[0]], drive, axis=1)
+    deviation = lfilter([1.0], [1.0, -const.inertia], drive, axis=2)
 
-    nominal = np.broadcast_to(p0, (n_walkers, k_samples, 6)).copy()
-    nominal[..., I_OMEGA] *= f_c
-    nominal[..., I_AX] *= f_s
-    nominal[..., I_A] *= f_s
-    nominal[..., I_CX] *= f_c * f_s
+    nominal = np.empty((n_walkers, 6, k_samples))
+    nominal[...] = const.nominal
+    if changes:  # (× 1 elsewhere would change nothing)
+        f_c, f_s = factors[:, 0], factors[:, 1]
+        nominal[:, I_OMEGA] *= f_c
+        nominal[:, I_AX] *= f_s
+        nominal[:, I_A] *= f_s
+        nominal[:, I_CX] *= f_c * f_s
     params = nominal + deviation
 
     if config.kinematics == "paper":
-        trend_x = params[..., I_CX] * t
-        phase = params[..., I_OMEGA] * t
-    else:
-        trend_x = _cumulative_trapezoid(params[..., I_CX], T)
-        phase = _cumulative_trapezoid(params[..., I_OMEGA], T)
-    markers = _markers(trend_x, params, phase, config.nominal.shank_length)
-    return HeelKneeWalk(t=t, nominal=nominal, deviation=deviation, phase=phase, markers=markers)
+        trend_x = params[:, I_CX] * t
+        phase = params[:, I_OMEGA] * t
+    else:  # ∫₀^{kT} rate dt with the trapezoid rule, starting at 0
+        rates = params[:, I_CX :: I_OMEGA - I_CX]  # c_x and ω rows (a view)
+        step = rates[..., 1:] + rates[..., :-1]
+        step *= 0.5 * T
+        integral = np.empty(rates.shape)
+        integral[..., 0] = 0.0
+        np.cumsum(step, axis=2, out=integral[..., 1:])
+        trend_x, phase = integral[:, 0], integral[:, 1]
+    markers = np.empty((n_walkers, k_samples, 2, 2))
+    _markers_into(markers, trend_x, params, phase, config.nominal.shank_length)
+    return HeelKneeWalk(
+        t=t,
+        nominal=nominal.transpose(0, 2, 1),
+        deviation=deviation.transpose(0, 2, 1),
+        phase=phase,
+        markers=markers,
+    )
 
 
-def _cumulative_trapezoid(rate: Array, dt: float) -> Array:
-    """∫₀^{kT} rate dt along axis 1 with the trapezoid rule, starting at 0."""
-    out = np.zeros_like(rate)
-    out[:, 1:] = np.cumsum(0.5 * dt * (rate[:, 1:] + rate[:, :-1]), axis=1)
-    return out
+def _markers_into(
+    out: Array, trend_x: Array, params: Array, phase: Array, shank_length: float
+) -> None:
+    """:func:`_markers` of parameter-major ``params`` (N, 6, K) into ``out``
+    (N, K, 2, 2): the same operations, on contiguous rows, then interleaved."""
+    s = np.sin(phase)
+    rows = np.empty((4, *s.shape))  # x₁, z₁, x₂, z₂
+    np.multiply(params[:, I_AX], s, out=rows[0])
+    rows[0] += trend_x  # trend_x + A_x s
+    np.multiply(params[:, I_AZ], s, out=rows[1])
+    rows[1] += params[:, I_CZ]  # c_z + A_z s
+    beta = params[:, I_A] * s  # eq 4.5
+    np.sin(beta, out=rows[2])
+    rows[2] *= shank_length
+    rows[2] += rows[0]  # eq 4.6
+    np.cos(beta, out=rows[3])
+    rows[3] *= shank_length
+    rows[3] += rows[1]  # eq 4.7
+    flat = out.reshape(*s.shape, 4)
+    for c in range(4):
+        flat[..., c] = rows[c]

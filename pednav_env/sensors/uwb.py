@@ -122,6 +122,15 @@ class UwbSpec:
         """T = 1/rate (s)."""
         return 1.0 / self.rate_hz
 
+    def with_noise_std(self, noise_std: float) -> UwbSpec:
+        """This spec with σ = ``noise_std`` (equal to ``replace(self, noise_std=...)``;
+        only the new σ is checked, the other fields are this valid spec's)."""
+        _require_nonneg("UwbSpec.noise_std", noise_std)
+        out = object.__new__(UwbSpec)
+        out.__dict__.update(self.__dict__)
+        object.__setattr__(out, "noise_std", noise_std)
+        return out
+
     @property
     def nlos_enter_prob(self) -> float:
         """Per-sample probability of starting a burst, 1 − exp(−rate·T)."""
@@ -194,15 +203,43 @@ def _check_rngs(rngs: Sequence[np.random.Generator], n_walkers: int) -> None:
 
 
 def _take_samples(a: Array, idx: NDArray[np.intp]) -> Array:
-    """``out[i, j, m] = a[i, idx[i, j, m], m]`` for ``a`` of shape (N, K, 2, 2).
+    """``out[i, j, m] = a[i, idx[2i + m, j], m]`` for ``a`` of shape (N, K, 2, 2)
+    and per-marker sample indices ``idx`` of shape (N·2, K) (:func:`_per_marker`).
 
-    The same as ``np.take_along_axis(a, idx[..., None], axis=1)``, but gathers
-    whole (x, z) pairs as rows of ``a`` viewed (N·K·2, 2), which is several
-    times faster.
+    ``np.take_along_axis`` in effect, but gathers whole (x, z) pairs, each one
+    16-byte item of ``a`` viewed as complex (an exact copy of the two floats), by
+    flat row index, which is several times faster.
     """
     n, k = a.shape[:2]
-    rows = (np.arange(n)[:, None, None] * k + idx) * 2 + np.arange(2)
-    return np.take(np.ascontiguousarray(a).reshape(-1, 2), rows, axis=0)
+    rows = idx * 2
+    rows += (np.arange(n)[:, None] * (2 * k) + np.arange(2)).reshape(-1, 1)
+    pairs = np.ascontiguousarray(a).reshape(-1, 2).view(np.complex128)[:, 0]
+    out = _from_per_marker(pairs.take(rows), n)  # (N, K, 2)
+    return out.view(np.float64).reshape(n, k, 2, 2)
+
+
+def _per_marker(a: NDArray) -> NDArray:
+    """``(N, K, 2)`` → ``(N·2, K)`` rows (one marker's samples per row), contiguous:
+    the scans along time below then run over contiguous memory."""
+    n, k = a.shape[:2]
+    return np.ascontiguousarray(a.transpose(0, 2, 1)).reshape(n * 2, k)
+
+
+def _last_index(flags: NDArray[np.bool_]) -> NDArray[np.intp]:
+    """Per row of ``(M, K)`` ``flags``: the index of the latest True at or before
+    each sample, −1 before the first."""
+    idx = np.where(flags, np.arange(flags.shape[1]), -1)
+    return np.maximum.accumulate(idx, axis=1, out=idx)
+
+
+def _from_per_marker(a: NDArray, n: int) -> NDArray:
+    """Inverse of :func:`_per_marker`: ``(N·2, K)`` rows → ``(N, K, 2)``, contiguous
+    (two strided copies, much faster than numpy's transposing copy here)."""
+    rows = a.reshape(n, 2, -1)
+    out = np.empty((n, rows.shape[2], 2), dtype=a.dtype)
+    out[:, :, 0] = rows[:, 0]
+    out[:, :, 1] = rows[:, 1]
+    return out
 
 
 def hold_last_valid(z: ArrayLike, valid: ArrayLike) -> Array:
@@ -223,14 +260,16 @@ def hold_last_valid(z: ArrayLike, valid: ArrayLike) -> Array:
     """
     z = np.asarray(z, dtype=float)
     valid = np.asarray(valid, dtype=bool)
-    k = valid.shape[1]
-    idx = np.where(valid, np.arange(k)[None, :, None], -1)
-    np.maximum.accumulate(idx, axis=1, out=idx)
-    first = np.argmax(valid, axis=1)  # (N, 2): first valid index (0 if none)
-    idx = np.where(idx < 0, first[:, None, :], idx)
+    rows = _per_marker(valid)
+    idx = _last_index(rows)
+    # before the first valid sample idx is −1: max(−1, first) = first; after it
+    # idx ≥ first already (first = 0 when a marker never reports)
+    np.maximum(idx, np.argmax(rows, axis=1)[:, None], out=idx)
     held = _take_samples(z, idx)
-    never = ~valid.any(axis=1)  # (N, 2)
+    never = ~rows.any(axis=1)  # (N·2,)
     if never.any():
+        n = valid.shape[0]
+        never = never.reshape(n, 2)
         held[np.broadcast_to(never[:, None, :, None], held.shape)] = 0.0
     return held
 
@@ -258,15 +297,34 @@ def nlos_states(u: Array, enter_prob: float, exit_prob: float) -> BoolArray:
     ndarray of bool, shape (N, K, 2)
         True inside a burst.
     """
+    return _from_per_marker(_nlos_rows(_per_marker(u), enter_prob, exit_prob), u.shape[0])
+
+
+def _nlos_rows(u: Array, enter_prob: float, exit_prob: float) -> BoolArray:
+    """:func:`nlos_states` of ``(M, K)`` rows of uniforms (time along a row).
+
+    With the parity c of the toggles up to each sample (an XOR scan) the state
+    is c XOR (a XOR c) taken at the last setting sample (0 if none): a setting
+    sample is not a toggle, so the parity since it is c XOR c there.
+    """
     a = u < enter_prob
     b = ~(u < exit_prob)
-    j = np.arange(u.shape[1])[None, :, None]
-    last_set = np.maximum.accumulate(np.where(a == b, j, -1), axis=1)
-    have = last_set >= 0
-    at = np.maximum(last_set, 0)
-    toggles = np.cumsum(a & ~b, axis=1)
-    since = toggles - np.take_along_axis(toggles, at, axis=1) * have
-    return (have & np.take_along_axis(a, at, axis=1)) ^ (since & 1).astype(bool)
+    last_set = _last_index(a == b)
+    parity = np.bitwise_xor.accumulate(a > b, axis=1)  # a > b: a toggle
+    # a XOR c per row behind a leading 0 (no setting sample yet), gathered at
+    # 1 + the last setting sample by flat index
+    m, k = u.shape
+    held = np.zeros((m, k + 1), dtype=bool)
+    np.bitwise_xor(a, parity, out=held[:, 1:])
+    last_set += (np.arange(m) * (k + 1) + 1)[:, None]
+    held = held.ravel().take(last_set)
+    held ^= parity
+    return held
+
+
+def _widen(flags: BoolArray) -> BoolArray:
+    """Per-marker flags ``(N, K, 2)`` repeated over (x, z): ``(N, K, 2, 2)``."""
+    return np.repeat(flags, 2, axis=-1).reshape((*flags.shape, 2))
 
 
 def measure_uwb(
@@ -311,7 +369,8 @@ def measure_uwb(
         for i, rng in enumerate(rngs):
             rng.standard_normal(out=noise[i])
         noise *= spec.noise_std
-        z = truth + 1.0 * noise + 0.0 + 0.0
+        z = truth + noise  # + 0.0 + 0.0 of the sum below: the same as one + 0.0
+        z += 0.0
         no = np.zeros((n, k, 2), dtype=bool)
         return UwbMeasurements(z=z, valid=~no, nlos=no, outlier=no.copy())
 
@@ -329,28 +388,37 @@ def measure_uwb(
         rng.random(out=u_drop[i])
     noise *= spec.noise_std
     burst_bias *= spec.nlos_bias_std
-    # Terms of error sources this spec switches off are skipped; the sum below
-    # then adds the scalars 1.0 / 0.0 in their place (the same numbers, bit for bit).
-    scale: Array | float = 1.0
+    # z = truth + scale · noise + bias + extra, where the terms of error sources
+    # this spec switches off are the scalars 1.0 / 0.0. Summed in that order, in
+    # place; a factor 1.0 is exact and of two trailing + 0.0 one does the same.
+    # Per-marker flags are widened to both axes ((N, K, 2) → (N, K, 2, 2)) before
+    # they select, so that every elementwise operation runs over whole arrays.
     bias: Array | float = 0.0
     extra: Array | float = 0.0
     if spec.nlos_enter_prob > 0.0:
-        nlos = nlos_states(u_state, spec.nlos_enter_prob, spec.nlos_exit_prob)
+        rows = _nlos_rows(_per_marker(u_state), spec.nlos_enter_prob, spec.nlos_exit_prob)
+        nlos = _from_per_marker(rows, n)
         # each burst keeps the bias drawn at its first sample
-        entry = nlos.copy()
-        entry[:, 1:] &= ~nlos[:, :-1]
-        j = np.arange(k)[None, :, None]
-        last_entry = np.maximum(np.maximum.accumulate(np.where(entry, j, -1), axis=1), 0)
-        bias = np.where(nlos[..., None], _take_samples(burst_bias, last_entry), 0.0)
-        scale = np.where(nlos, spec.nlos_noise_scale, 1.0)[..., None]
+        entry = rows.copy()
+        entry[:, 1:] &= ~rows[:, :-1]
+        last_entry = np.maximum(_last_index(entry), 0)
+        wide = _widen(nlos)
+        bias = np.where(wide, _take_samples(burst_bias, last_entry), 0.0)
+        noise *= np.where(wide, spec.nlos_noise_scale, 1.0)  # scale · noise
         dropped = u_drop < np.where(nlos, spec.nlos_drop_prob, spec.drop_prob)
     else:  # never enters a burst
         nlos = np.zeros((n, k, 2), dtype=bool)
         dropped = u_drop < spec.drop_prob
     outlier = u_out < spec.outlier_prob
     if spec.outlier_prob > 0.0:
-        extra = np.where(outlier[..., None], spec.outlier_std * out_err, 0.0)
-    z = truth + scale * noise + bias + extra
+        out_err *= spec.outlier_std
+        extra = np.where(_widen(outlier), out_err, 0.0)
+    z = truth + noise
+    z += bias
+    if not isinstance(extra, float):
+        z += extra
+    elif not isinstance(bias, float):
+        z += 0.0
     valid = ~dropped
     if dropped.any():
         z = hold_last_valid(z, valid)
