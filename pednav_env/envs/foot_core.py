@@ -3,8 +3,8 @@
 One implementation for any number of lanes: the scalar environment is this
 core with N = 1, the native vector environment the same core with
 N = ``num_envs``. Each lane owns its episode (walk, IMU record, seed); all
-lanes step through the ZUPT-UKF together, one IMU sample at a time, in one
-numpy call chain (:class:`pednav_env.nav.zupt_ukf.ZuptUkf`).
+lanes go through the ZUPT-UKF together, a whole decision interval per call
+(:meth:`pednav_env.nav.zupt_ukf.ZuptUkf.advance`), in one numpy call chain.
 
 Episode: a walk drawn from the lane's generator (route with turns, stops and
 gait changes; IMU grade and its errors), a 1 s alignment at rest, then
