@@ -73,7 +73,6 @@ from pednav_env.nav.ukf import (
     update_linear,
 )
 from pednav_env.rotations import (
-    dcm_to_euler,
     euler_to_dcm,
     euler_to_quat,
     quat_to_euler,
@@ -96,6 +95,14 @@ RUN_BLOCK = 100
 
 
 # --------------------------------------------------------------------------- model functions
+def _wrap_angles_inplace(y: Array) -> None:
+    """Wrap the angle entries of states ``(..., 9)`` into [−π, π), in place;
+    a no-op check when they already are (the usual case for residuals)."""
+    a = y[..., ANGLES]
+    if a.size and (a.max() >= np.pi or a.min() < -np.pi):
+        y[..., ANGLES] = wrap_angle(a)
+
+
 def state_residual(a: Array, b: Array) -> Array:
     """a − b with wrapped angle differences (filterpy's ``residual_x``)."""
     d = np.asarray(a, dtype=float) - b
@@ -106,7 +113,7 @@ def state_residual(a: Array, b: Array) -> Array:
 def state_add(x: Array, dx: Array) -> Array:
     """x + dx with wrapped angles (filterpy's ``state_add``)."""
     y = np.asarray(x, dtype=float) + dx
-    y[..., ANGLES] = wrap_angle(y[..., ANGLES])
+    _wrap_angles_inplace(y)
     return y
 
 
@@ -117,14 +124,6 @@ def state_mean(sigmas: Array, Wm: Array) -> Array:
     ref = sigmas[..., 0, :]
     d = state_residual(sigmas, ref[..., None, :])
     return state_add(ref, np.einsum("s,...sd->...d", Wm, d))
-
-
-def _wrap_angles_inplace(y: Array) -> None:
-    """Wrap the angle entries of states ``(..., 9)`` into [−π, π), in place;
-    a no-op check when they already are (the usual case for residuals)."""
-    a = y[..., ANGLES]
-    if a.size and (a.max() >= np.pi or a.min() < -np.pi):
-        y[..., ANGLES] = wrap_angle(a)
 
 
 def prior_moments(sigmas: Array, weights: MerweWeights, Q: Array) -> tuple[Array, Array]:
@@ -286,8 +285,12 @@ def process_noise(
     if basis is None:
         basis = process_noise_basis(spec, rate_hz)
     powers = tau[:, None] ** np.arange(1, 5) * np.asarray(scale, dtype=float)[:, None]
-    # elementwise, not a BLAS product: a walker's Q must not depend on the batch size
-    return (powers[:, :, None, None] * basis).sum(axis=1)
+    # Only the entries of the basis' pattern are formed, elementwise (not a BLAS
+    # product: a walker's Q must not depend on the batch size).
+    rows, cols = np.nonzero(basis.any(axis=0))
+    Q = np.zeros(tau.shape + (STATE_DIM, STATE_DIM))
+    Q[:, rows, cols] = (powers[:, :, None] * basis[:, rows, cols]).sum(axis=1)
+    return Q
 
 
 @dataclass
@@ -335,8 +338,13 @@ def state_to_dcm(y: Array) -> tuple[Array, Array, Array]:
 
 def dcm_to_state(C_nb: Array, vel_n: Array, pos_n: Array) -> Array:
     """State vectors ``(..., 9)`` from attitude matrix, velocity and position."""
-    e = dcm_to_euler(C_nb)
-    return np.concatenate((pos_n, vel_n, e[..., 1:2], e[..., 2:3], e[..., 0:1]), axis=-1)
+    y = np.empty(np.broadcast_shapes(C_nb.shape[:-2], vel_n.shape[:-1]) + (STATE_DIM,))
+    y[..., 0:3], y[..., 3:6] = pos_n, vel_n
+    # Euler angles of C_nb as in rotations.dcm_to_euler, written in place
+    y[..., 6] = np.arcsin(np.clip(-C_nb[..., 2, 0], -1.0, 1.0))
+    y[..., 7] = np.arctan2(C_nb[..., 2, 1], C_nb[..., 2, 2])
+    y[..., 8] = np.arctan2(C_nb[..., 1, 0], C_nb[..., 0, 0])
+    return y
 
 
 def _vertical_row(C_central: Array, D_anchor: Array) -> Array:
