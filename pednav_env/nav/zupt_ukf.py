@@ -732,16 +732,19 @@ class ZuptUkf:
         positions = np.zeros((n, k, 3))
         states = np.zeros((n, k, STATE_DIM)) if record == "state" else None
         t_all = np.arange(1, k + 1)
-        for lanes, a, q0, v0, p0 in anchors:
-            t = np.broadcast_to(t_all, (len(lanes), k))
-            q, v, p = self._sigmas_at(lanes, a, t, pre, sigmas=(q0, v0, p0))
-            later = (t > a[:, None])[..., None]
-            positions[lanes] = np.where(
-                later, np.einsum("s,btsd->btd", self.weights.Wm, p), positions[lanes]
-            )
+        # owner[i, t-1] = the anchor set (round) whose redraw sample t of walker i follows
+        owner = np.zeros((n, k), dtype=np.int64)
+        for r, (lanes, a, *_) in enumerate(anchors):
+            owner[lanes] = np.where(t_all[None, :] > a[:, None], r, owner[lanes])
+        for r, (lanes, a, C0, v0, p0) in enumerate(anchors):
+            i, t = np.nonzero(owner[lanes] == r)  # each sample is evaluated once
+            if i.size == 0:
+                continue
+            t = t + 1
+            C, v, p = self._sigmas_at(lanes[i], a[i], t, pre, sigmas=(C0[i], v0[i], p0[i]))
+            positions[lanes[i], t - 1] = np.einsum("s,bsd->bd", self.weights.Wm, p)
             if states is not None:
-                sig = dcm_to_state(q, v, p)
-                states[lanes] = np.where(later, state_mean(sig, self.weights.Wm), states[lanes])
+                states[lanes[i], t - 1] = state_mean(dcm_to_state(C, v, p), self.weights.Wm)
         hold = t_all[None, :] >= diverged_at[:, None]  # held at the frozen posterior
         if hold.any():
             positions = np.where(hold[..., None], self.mean_position()[:, None, :], positions)
