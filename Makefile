@@ -16,7 +16,7 @@ $(VENV)/.installed: pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev]'
 	touch $@
 
-# Main job: train a PPO tuner on FootZupt-v0 (about 10 min on 2 cores), then compare it
+# Main job: train a PPO tuner on FootZupt-v0 (about 3 min on 2 cores), then compare it
 # with the paper, tuned-fixed and innovation-adaptive policies on 100 held-out episodes.
 DEMO_STEPS ?= 400000
 demo: setup
