@@ -188,3 +188,23 @@ def test_block_advance_equals_sample_by_sample(paper_walk):
     np.testing.assert_array_equal(blk.stance, one.stance)
     np.testing.assert_array_equal(upd_blk, upd_one)
     assert np.abs(blk.x[..., :3] - one.x[..., :3]).max() < 1e-6  # m; rounding, amplified
+
+
+def test_advance_rejects_bad_blocks():
+    eng = ZuptUkf(ZuptUkfConfig(), RATE, 2)
+    ok = np.zeros((2, 5, 3))
+    ok[..., 2] = 9.80665
+    eng.initialize(np.repeat(ok, 20, axis=1))
+    with pytest.raises(ValueError, match="omega_b"):
+        eng.advance(np.zeros((3, 5, 3)), ok)
+    with pytest.raises(ValueError, match="f_b"):
+        eng.advance(np.zeros((2, 5, 3)), ok[:, :4])
+    with pytest.raises(ValueError, match="record"):
+        eng.advance(np.zeros((2, 5, 3)), ok, record="everything")
+    with pytest.raises(ValueError, match="valid"):
+        eng.advance(np.zeros((2, 5, 3)), ok, valid=np.array([5, 6]))
+    with pytest.raises(ValueError, match="shoe_statistic"):
+        ZuptUkf(ZuptUkfConfig(detector=ShoeDetectorConfig()), RATE, 2).advance(ok * 0, ok)
+    rec = np.repeat(ok, 30, axis=1)
+    with pytest.raises(ValueError, match="block_samples"):
+        eng.run(np.zeros_like(rec), rec, block_samples=0)

@@ -535,7 +535,14 @@ class ZuptUkf:
         ``record`` = ``"position"`` or ``"state"`` also returns the mean after
         every sample.
         """
-        n, k = self.n, omega_b.shape[1]
+        n = self.n
+        if omega_b.ndim != 3 or omega_b.shape[0] != n or omega_b.shape[2] != 3:
+            raise ValueError(f"omega_b must be ({n}, K, 3), got {omega_b.shape}")
+        if f_b.shape != omega_b.shape:
+            raise ValueError(f"f_b must have omega_b's shape {omega_b.shape}, got {f_b.shape}")
+        if record not in (None, "position", "state"):
+            raise ValueError(f"record must be None, 'position' or 'state', got {record!r}")
+        k = omega_b.shape[1]
         dt = self.dt
         if increments is None:
             increments = self.increments(omega_b, f_b)
@@ -543,6 +550,8 @@ class ZuptUkf:
         if self.uses_shoe and shoe_statistic is None:
             raise ValueError("the SHOE detector needs shoe_statistic for each sample")
         valid = np.full(n, k) if valid is None else np.asarray(valid, dtype=np.int64)
+        if valid.shape != (n,) or valid.min() < 0 or valid.max() > k:
+            raise ValueError(f"valid must be ({n},) sample counts in [0, {k}], got {valid!r}")
         frozen = self.diverged.copy()
         pre = preintegrate(dqT, f_mid, dt, frozen)
         kidx = np.arange(k)
