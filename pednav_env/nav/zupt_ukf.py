@@ -486,8 +486,9 @@ class ZuptUkf:
     # ------------------------------------------------------------------ step
     def increments(self, omega_b: Array, f_b: Array) -> tuple[Array, Array, Array]:
         """Per-sample quantities shared by a walker's sigma points, for any
-        number of samples at once: bias-corrected rate, Δq matrix, specific
-        force at mid-interval attitude (``omega_b``/``f_b`` (N, ..., 3))."""
+        number of samples at once: bias-corrected rate, attitude increment
+        C(Δq) as a matrix, specific force at mid-interval attitude
+        (``omega_b``/``f_b`` (N, ..., 3))."""
         bias = self.gyro_bias.reshape((self.n,) + (1,) * (omega_b.ndim - 2) + (3,))
         omega_c = omega_b - bias
         dC, f_mid = step_increments_dcm(omega_c, f_b, self.dt)
@@ -546,14 +547,14 @@ class ZuptUkf:
         dt = self.dt
         if increments is None:
             increments = self.increments(omega_b, f_b)
-        omega_c, dqT, f_mid = increments
+        omega_c, dC, f_mid = increments
         if self.uses_shoe and shoe_statistic is None:
             raise ValueError("the SHOE detector needs shoe_statistic for each sample")
         valid = np.full(n, k) if valid is None else np.asarray(valid, dtype=np.int64)
         if valid.shape != (n,) or valid.min() < 0 or valid.max() > k:
             raise ValueError(f"valid must be ({n},) sample counts in [0, {k}], got {valid!r}")
         frozen = self.diverged.copy()
-        pre = preintegrate(dqT, f_mid, dt, frozen)
+        pre = preintegrate(dC, f_mid, dt, frozen)
         kidx = np.arange(k)
         boundaries = self.config.update_mode is UpdateMode.STANCE_BOUNDARIES
         anchor = np.zeros(n, dtype=np.int64)  # sample of each walker's last redraw
@@ -604,13 +605,13 @@ class ZuptUkf:
             idx, e = todo[has], ev[has].argmax(axis=1)
             if idx.size == 0:
                 break
-            q, v, p = self._sigmas_at(idx, anchor[idx], e, pre)
+            C, v, p = self._sigmas_at(idx, anchor[idx], e, pre)
             # A walker whose prior is non-finite or too fast diverged: no more ZUPTs.
-            bad = _diverging(q[:, 0], v[:, 0], p[:, 0])
+            bad = _diverging(C[:, 0], v[:, 0], p[:, 0])
             if bad.any():
                 diverged_at[idx[bad]] = e[bad]
                 ok = ~bad
-                idx, e, q, v, p = idx[ok], e[ok], q[ok], v[ok], p[ok]
+                idx, e, C, v, p = idx[ok], e[ok], C[ok], v[ok], p[ok]
                 if idx.size == 0:
                     break
             elapsed = anchor_elapsed[idx] + (e - anchor[idx]) * dt
@@ -619,7 +620,7 @@ class ZuptUkf:
                 if self.record_updates
                 else None
             )
-            accepted, nis = self._update(idx, q, v, p, elapsed, kinds, self.sample[idx] + e)
+            accepted, nis = self._update(idx, C, v, p, elapsed, kinds, self.sample[idx] + e)
             anchor[idx], anchor_elapsed[idx], next_from[idx] = e, 0.0, e + 1
             nis_log_sum[idx] += np.where(accepted, np.log1p(nis), 0.0)
             accepted_count[idx] += accepted
@@ -652,8 +653,8 @@ class ZuptUkf:
             bad &= np.arange(1, k + 1)[None, :] > anchor[open_, None]
             hit = bad.any(axis=1)
             diverged_at[open_[hit]] = bad[hit].argmax(axis=1) + 1
-            q, v, p = self._sigmas_at(lanes, anchor[lanes], np.full(lanes.size, k), pre)
-            self.sig_C[lanes], self.sig_v[lanes], self.sig_p[lanes] = q, v, p
+            C, v, p = self._sigmas_at(lanes, anchor[lanes], np.full(lanes.size, k), pre)
+            self.sig_C[lanes], self.sig_v[lanes], self.sig_p[lanes] = C, v, p
         self.elapsed_s = anchor_elapsed + (k - anchor) * dt
         upd = last_accepted >= 0
         self.time_since_update_s = np.where(
