@@ -48,7 +48,26 @@ def timed(owner: Any, name: str, label: str) -> None:
     setattr(owner, name, wrapper)
 
 
+rounds: list[tuple[int, float]] = []  # (walkers in the round, CPU s)
+
+
+def record_round_sizes() -> None:
+    """Wrap ``ZuptUkf._update`` to record each round's size and CPU time."""
+    fn = zupt_ukf.ZuptUkf._update
+
+    @functools.wraps(fn)
+    def wrapper(self: Any, idx: Any, *args: Any, **kwargs: Any) -> Any:
+        t0 = time.process_time()
+        try:
+            return fn(self, idx, *args, **kwargs)
+        finally:
+            rounds.append((len(idx), time.process_time() - t0))
+
+    zupt_ukf.ZuptUkf._update = wrapper  # type: ignore[method-assign]
+
+
 if __name__ == "__main__":
+    record_round_sizes()
     timed(zupt_ukf.ZuptUkf, "_update", "ZUPT update rounds")
     timed(zupt_ukf.ZuptUkf, "_sigmas_at", "moving sigma points")
     timed(zupt_ukf.ZuptUkf, "increments", "per-sample increments")
@@ -67,16 +86,24 @@ if __name__ == "__main__":
         core.step(zero)
     spent.clear()
     calls.clear()
+    rounds.clear()
     t0 = time.process_time()
     for _ in range(STEPS):
         core.step(zero)
     total = time.process_time() - t0
     print(f"N = {N}: core.step {total / STEPS * 1e3:.1f} ms CPU per vector step (no resets),")
     print(f"  ≈ {N * STEPS / total:.0f} env steps/s without resets")
-    rounds = calls.get("ZUPT update rounds", 0) / STEPS
+    rounds_per_step = calls.get("ZUPT update rounds", 0) / STEPS
     for label, t in sorted(spent.items(), key=lambda kv: -kv[1]):
         print(f"  {label:45s} {t / STEPS * 1e3:6.2f} ms")
-    print(f"  update rounds per vector step: {rounds:.1f}")
+    print(f"  update rounds per vector step: {rounds_per_step:.1f}")
+    sizes = np.array(rounds)
+    for lo, hi in ((1, 20), (20, 60), (60, 120), (120, N + 1)):
+        sel = (sizes[:, 0] >= lo) & (sizes[:, 0] < hi)
+        print(
+            f"    rounds of {lo:3d}–{hi - 1:3d} walkers: {sel.sum() / STEPS:4.1f} per step, "
+            f"{sizes[sel, 1].sum() / STEPS * 1e3:5.2f} ms"
+        )
 
     spent.clear()
     t0 = time.process_time()
