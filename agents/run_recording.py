@@ -48,11 +48,11 @@ def run_with_policy(
 ) -> tuple[RecordingRun, dict[str, np.ndarray]]:
     """Drive the replay core with a policy; return the replayed run and the knob schedule."""
     from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
-    from pednav_env.envs.foot_zupt import _spaces
+    from pednav_env.envs.native import lane_spaces
 
     config = FootReplayConfig(decision_interval_s=interval_s)
     core = FootReplayCore(config, 1, "pednav run", recordings=[rec])
-    action_space, _ = _spaces(core.config, core)
+    action_space, _ = lane_spaces(core, core.config.action_dim)
     policy = _load_policy(policy_name, action_space)
     core.reset_lanes(np.array([0]), [np.random.default_rng(0)])
     obs = core.obs.copy()

@@ -6,11 +6,11 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
 
 from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
-from pednav_env.envs.foot_zupt import FootZuptEnv, FootZuptVectorEnv, _spaces
+from pednav_env.envs.foot_zupt import FootZuptEnv, FootZuptVectorEnv
+from pednav_env.envs.native import lane_spaces
 
 ENV_ID = "pednav/FootZuptReplay-v0"
 
@@ -113,7 +113,7 @@ class FootZuptReplayEnv(FootZuptEnv):
         self.render_mode = render_mode
         self.core = FootReplayCore(self.replay_config, 1, ENV_ID)
         self.config = self.core.config
-        self.action_space, self.observation_space = _spaces(self.config, self.core)
+        self.action_space, self.observation_space = lane_spaces(self.core, self.config.action_dim)
         self._figure = None
 
     def lane_info(self) -> dict[str, Any]:
@@ -139,27 +139,16 @@ class FootZuptReplayVectorEnv(FootZuptVectorEnv):
         config: FootReplayConfig | None = None,
         render_mode: str | None = None,
     ) -> None:
-        if render_mode is not None:
-            raise ValueError(f"{ENV_ID}: the vector env does not render; got {render_mode!r}")
+        self.reject_render_mode(ENV_ID, render_mode)
         self.replay_config = _make_config(
             config,
             data_dir=None if data_dir is None else str(data_dir),
             decision_interval_s=decision_interval_s,
             tune_min_stance=tune_min_stance,
         )
-        self.num_envs = int(num_envs)
-        self.core = FootReplayCore(self.replay_config, self.num_envs, ENV_ID)
-        self.config = self.core.config
-        self.single_action_space, self.single_observation_space = _spaces(self.config, self.core)
-        self.action_space = spaces.Box(
-            -1.0, 1.0, (self.num_envs, self.config.action_dim), np.float32
-        )
-        self.observation_space = spaces.Box(
-            np.tile(self.core.obs_low, (self.num_envs, 1)),
-            np.tile(self.core.obs_high, (self.num_envs, 1)),
-            dtype=np.float32,
-        )
-        self.render_mode = None
+        core = FootReplayCore(self.replay_config, int(num_envs), ENV_ID)
+        self.config = core.config
+        self.attach_core(core, self.config.action_dim)
 
     def lane_info(self) -> dict[str, np.ndarray]:
         info = super().lane_info()

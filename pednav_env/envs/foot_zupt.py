@@ -6,7 +6,6 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from gymnasium import spaces
 
 from pednav_env.envs.foot_core import (
     ACTION_KNOBS,
@@ -15,7 +14,7 @@ from pednav_env.envs.foot_core import (
     FootZuptConfig,
     FootZuptCore,
 )
-from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces
 
 ENV_ID = "pednav/FootZupt-v0"
 
@@ -26,11 +25,6 @@ def _make_config(config: FootZuptConfig | None, **overrides: Any) -> FootZuptCon
         return FootZuptConfig(**fields)
     return replace(config, **fields) if fields else config
 
-
-def _spaces(config: FootZuptConfig, core: FootZuptCore) -> tuple[spaces.Box, spaces.Box]:
-    action = spaces.Box(-1.0, 1.0, (config.action_dim,), np.float32)
-    obs = spaces.Box(core.obs_low, core.obs_high, dtype=np.float32)
-    return action, obs
 
 
 class FootZuptEnv(NativeScalarEnv):
@@ -169,7 +163,7 @@ class FootZuptEnv(NativeScalarEnv):
         self.render_mode = render_mode
         self.core = FootZuptCore(self.config, 1, ENV_ID)
         self.check_render_mode(render_mode)
-        self.action_space, self.observation_space = _spaces(self.config, self.core)
+        self.action_space, self.observation_space = lane_spaces(self.core, self.config.action_dim)
 
     def lane_info(self) -> dict[str, Any]:
         return {"imu_grade": self.core.grade[0]}
@@ -189,8 +183,7 @@ class FootZuptVectorEnv(NativeVectorEnv):
         config: FootZuptConfig | None = None,
         render_mode: str | None = None,
     ) -> None:
-        if render_mode is not None:
-            raise ValueError(f"{ENV_ID}: the vector env does not render; got {render_mode!r}")
+        self.reject_render_mode(ENV_ID, render_mode)
         self.config = _make_config(
             config,
             scenario=scenario,
@@ -198,18 +191,7 @@ class FootZuptVectorEnv(NativeVectorEnv):
             rate_hz=rate_hz,
             tune_min_stance=tune_min_stance,
         )
-        self.num_envs = int(num_envs)
-        self.core = FootZuptCore(self.config, self.num_envs, ENV_ID)
-        self.single_action_space, self.single_observation_space = _spaces(self.config, self.core)
-        self.action_space = spaces.Box(
-            -1.0, 1.0, (self.num_envs, self.config.action_dim), np.float32
-        )
-        self.observation_space = spaces.Box(
-            np.tile(self.core.obs_low, (self.num_envs, 1)),
-            np.tile(self.core.obs_high, (self.num_envs, 1)),
-            dtype=np.float32,
-        )
-        self.render_mode = None
+        self.attach_core(FootZuptCore(self.config, int(num_envs), ENV_ID), self.config.action_dim)
 
     def lane_info(self) -> dict[str, np.ndarray]:
         return {"imu_grade": np.array(self.core.grade, dtype=object)}

@@ -6,7 +6,6 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from gymnasium import spaces
 
 from pednav_env.envs.marker_core import (
     ACTION_KNOBS,
@@ -14,7 +13,7 @@ from pednav_env.envs.marker_core import (
     MarkerTrackConfig,
     MarkerTrackCore,
 )
-from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces
 
 ENV_ID = "pednav/MarkerTrack-v0"
 #: Seconds of track shown by :meth:`MarkerTrackEnv.render`.
@@ -27,11 +26,6 @@ def _make_config(config: MarkerTrackConfig | None, **overrides: Any) -> MarkerTr
         return MarkerTrackConfig(**fields)
     return replace(config, **fields) if fields else config
 
-
-def _spaces(config: MarkerTrackConfig, core: MarkerTrackCore) -> tuple[spaces.Box, spaces.Box]:
-    action = spaces.Box(-1.0, 1.0, (config.action_dim,), np.float32)
-    obs = spaces.Box(core.obs_low, core.obs_high, dtype=np.float32)
-    return action, obs
 
 
 class MarkerTrackEnv(NativeScalarEnv):
@@ -178,7 +172,7 @@ class MarkerTrackEnv(NativeScalarEnv):
         self.render_mode = render_mode
         self.core = MarkerTrackCore(self.config, 1, ENV_ID)
         self.check_render_mode(render_mode)
-        self.action_space, self.observation_space = _spaces(self.config, self.core)
+        self.action_space, self.observation_space = lane_spaces(self.core, self.config.action_dim)
 
     def lane_info(self) -> dict[str, Any]:
         return {"uwb_condition": self.core.condition[0]}
@@ -217,23 +211,12 @@ class MarkerTrackVectorEnv(NativeVectorEnv):
         config: MarkerTrackConfig | None = None,
         render_mode: str | None = None,
     ) -> None:
-        if render_mode is not None:
-            raise ValueError(f"{ENV_ID}: the vector env does not render; got {render_mode!r}")
+        self.reject_render_mode(ENV_ID, render_mode)
         self.config = _make_config(
             config, scenario=scenario, decision_interval_s=decision_interval_s, rate_hz=rate_hz
         )
-        self.num_envs = int(num_envs)
-        self.core = MarkerTrackCore(self.config, self.num_envs, ENV_ID)
-        self.single_action_space, self.single_observation_space = _spaces(self.config, self.core)
-        self.action_space = spaces.Box(
-            -1.0, 1.0, (self.num_envs, self.config.action_dim), np.float32
-        )
-        self.observation_space = spaces.Box(
-            np.tile(self.core.obs_low, (self.num_envs, 1)),
-            np.tile(self.core.obs_high, (self.num_envs, 1)),
-            dtype=np.float32,
-        )
-        self.render_mode = None
+        core = MarkerTrackCore(self.config, int(num_envs), ENV_ID)
+        self.attach_core(core, self.config.action_dim)
 
     def lane_info(self) -> dict[str, np.ndarray]:
         return {"uwb_condition": self.core.condition.copy()}

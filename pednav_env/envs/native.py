@@ -23,6 +23,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 
@@ -126,12 +127,38 @@ class NativeScalarEnv(gym.Env):
             self._figure = None
 
 
+def lane_spaces(core: Any, action_dim: int) -> tuple[spaces.Box, spaces.Box]:
+    """Action space Box(-1, 1, (action_dim,)) and observation space of one lane of
+    ``core`` (bounds ``core.obs_low`` / ``core.obs_high``)."""
+    action = spaces.Box(-1.0, 1.0, (action_dim,), np.float32)
+    return action, spaces.Box(core.obs_low, core.obs_high, dtype=np.float32)
+
+
 class NativeVectorEnv(VectorEnv):
-    """Base class: subclasses set ``self.core``, ``self.num_envs`` and the spaces."""
+    """Base class: subclasses build their core and call :meth:`attach_core`."""
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
     core: Any
     _lane_rngs: list[np.random.Generator] | None = None
+
+    @staticmethod
+    def reject_render_mode(env_id: str, render_mode: str | None) -> None:
+        """The native vector envs do not render (their scalar versions do)."""
+        if render_mode is not None:
+            raise ValueError(f"{env_id}: the vector env does not render; got {render_mode!r}")
+
+    def attach_core(self, core: Any, action_dim: int) -> None:
+        """Use ``core`` (its N lanes) and set the single-lane and batched spaces."""
+        self.core = core
+        self.num_envs = int(core.n)
+        self.single_action_space, self.single_observation_space = lane_spaces(core, action_dim)
+        self.action_space = spaces.Box(-1.0, 1.0, (self.num_envs, action_dim), np.float32)
+        self.observation_space = spaces.Box(
+            np.tile(core.obs_low, (self.num_envs, 1)),
+            np.tile(core.obs_high, (self.num_envs, 1)),
+            dtype=np.float32,
+        )
+        self.render_mode = None
 
     def lane_info(self) -> dict[str, np.ndarray]:
         """Per-lane descriptors of the current episodes (e.g. the sensor grade)."""

@@ -6,9 +6,8 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from gymnasium import spaces
 
-from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces
 from pednav_env.envs.waist_core import (
     ACTION_DIM,
     ACTION_KNOBS,
@@ -27,11 +26,6 @@ def _make_config(config: WaistStepConfig | None, **overrides: Any) -> WaistStepC
         return WaistStepConfig(**fields)
     return replace(config, **fields) if fields else config
 
-
-def _spaces(core: WaistStepCore) -> tuple[spaces.Box, spaces.Box]:
-    action = spaces.Box(-1.0, 1.0, (ACTION_DIM,), np.float32)
-    obs = spaces.Box(core.obs_low, core.obs_high, dtype=np.float32)
-    return action, obs
 
 
 class WaistStepEnv(NativeScalarEnv):
@@ -188,7 +182,7 @@ class WaistStepEnv(NativeScalarEnv):
         self.render_mode = render_mode
         self.core = WaistStepCore(self.config, 1, ENV_ID)
         self.check_render_mode(render_mode)
-        self.action_space, self.observation_space = _spaces(self.core)
+        self.action_space, self.observation_space = lane_spaces(self.core, ACTION_DIM)
 
     def lane_info(self) -> dict[str, Any]:
         return {"sensor_grade": self.core.grade[0]}
@@ -208,8 +202,7 @@ class WaistStepVectorEnv(NativeVectorEnv):
         config: WaistStepConfig | None = None,
         render_mode: str | None = None,
     ) -> None:
-        if render_mode is not None:
-            raise ValueError(f"{ENV_ID}: the vector env does not render; got {render_mode!r}")
+        self.reject_render_mode(ENV_ID, render_mode)
         self.config = _make_config(
             config,
             scenario=scenario,
@@ -217,16 +210,7 @@ class WaistStepVectorEnv(NativeVectorEnv):
             rate_hz=rate_hz,
             paper_steps=paper_steps,
         )
-        self.num_envs = int(num_envs)
-        self.core = WaistStepCore(self.config, self.num_envs, ENV_ID)
-        self.single_action_space, self.single_observation_space = _spaces(self.core)
-        self.action_space = spaces.Box(-1.0, 1.0, (self.num_envs, ACTION_DIM), np.float32)
-        self.observation_space = spaces.Box(
-            np.tile(self.core.obs_low, (self.num_envs, 1)),
-            np.tile(self.core.obs_high, (self.num_envs, 1)),
-            dtype=np.float32,
-        )
-        self.render_mode = None
+        self.attach_core(WaistStepCore(self.config, int(num_envs), ENV_ID), ACTION_DIM)
 
     def lane_info(self) -> dict[str, np.ndarray]:
         return {"sensor_grade": np.array(self.core.grade, dtype=object)}
