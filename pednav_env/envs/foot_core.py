@@ -29,6 +29,7 @@ from pednav_env.gait.foot_route import (
     random_route,
     square_route,
 )
+from pednav_env.nav.detectors import run_lengths
 from pednav_env.nav.zupt_ukf import ZuptUkf, ZuptUkfConfig
 from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
 
@@ -349,10 +350,7 @@ class FootZuptCore:
     def _stance_durations(self, stance: NDArray[np.bool_], end: NDArray[np.bool_]) -> None:
         """Moving average (weight 0.2) of the durations of detected stances that
         ended in the interval, in order; ``stance_len`` carries an open stance."""
-        k = stance.shape[1]
-        j = np.arange(k)
-        last_out = np.maximum.accumulate(np.where(stance, -1, j[None, :]), axis=1)
-        run = np.where(last_out >= 0, j[None, :] - last_out, self.stance_len[:, None] + j + 1)
+        run = run_lengths(stance, self.stance_len)
         before = np.concatenate((self.stance_len[:, None], run[:, :-1]), axis=1)
         self.stance_len = run[:, -1].copy()
         rank = np.cumsum(end, axis=1)

@@ -165,6 +165,17 @@ def apply_min_duration(condition: NDArray[np.bool_], min_samples: int) -> NDArra
     return out
 
 
+def run_lengths(flags: NDArray[np.bool_], carried: NDArray[np.integer]) -> NDArray[np.int64]:
+    """For flags ``(B, K)``, how many samples in a row each flag has been true up to
+    and including sample k (0 where it is false); ``carried`` (B,) is the run
+    length before the block. k − (last false index), or carried + k + 1 when the
+    flag held all block long."""
+    k = flags.shape[1]
+    idx = np.arange(k)
+    last_false = np.maximum.accumulate(np.where(flags, -1, idx[None, :]), axis=1)
+    return np.where(last_false >= 0, idx[None, :] - last_false, carried[:, None] + idx + 1)
+
+
 @dataclass(frozen=True)
 class DetectorPass:
     """Detector output over K samples of B walkers (not yet committed)."""
@@ -269,12 +280,7 @@ class OnlineStanceDetector:
         history: Array,
         count: NDArray[np.int64],
     ) -> DetectorPass:
-        # run_k = samples the condition has held up to k: k − (last failing index),
-        # or the carried run + k + 1 when it held all block long.
-        k = cond.shape[1]
-        idx = np.arange(k)
-        last_fail = np.maximum.accumulate(np.where(cond, -1, idx[None, :]), axis=1)
-        run = np.where(last_fail >= 0, idx[None, :] - last_fail, self.run[lanes, None] + idx + 1)
+        run = run_lengths(cond, self.run[lanes])
         now = run >= self.min_samples(min_stance_s)[:, None]
         before = np.concatenate((self.in_stance[lanes, None], now[:, :-1]), axis=1)
         return DetectorPass(now, now & ~before, before & ~now, run[:, -1], history, count)

@@ -60,6 +60,7 @@ from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.nav.alignment import align_static
 from pednav_env.nav.detectors import (
     DetectorConfig,
+    DetectorPass,
     OnlineStanceDetector,
     ShoeDetectorConfig,
     ThresholdDetectorConfig,
@@ -106,7 +107,7 @@ def _wrap_angles_inplace(y: Array) -> None:
 def state_residual(a: Array, b: Array) -> Array:
     """a − b with wrapped angle differences (filterpy's ``residual_x``)."""
     d = np.asarray(a, dtype=float) - b
-    d[..., ANGLES] = wrap_angle(d[..., ANGLES])
+    _wrap_angles_inplace(d)
     return d
 
 
@@ -131,15 +132,12 @@ def prior_moments(sigmas: Array, weights: MerweWeights, Q: Array) -> tuple[Array
     plus process noise: the same mean and covariance as
     ``unscented_transform(sigmas, weights, Q, state_mean, state_residual)``
     (filterpy's ``x_mean_fn`` / ``residual_x``), with the residuals from the
-    central point computed once."""
+    central point (as in :func:`state_mean`) computed once."""
     ref = sigmas[:, 0, :]
-    d = sigmas - ref[:, None, :]
-    _wrap_angles_inplace(d)
+    d = state_residual(sigmas, ref[:, None, :])
     mean_d = np.matmul(weights.Wm, d)
-    x = ref + mean_d
-    _wrap_angles_inplace(x)
-    y = d - mean_d[:, None, :]
-    _wrap_angles_inplace(y)
+    x = state_add(ref, mean_d)
+    y = state_residual(d, mean_d[:, None, :])  # = sigmas − x, wrapped
     P = np.matmul(np.swapaxes(y * weights.Wc[:, None], -1, -2), y) + Q
     return x, P
 
@@ -634,8 +632,7 @@ class ZuptUkf:
                 f_new = np.matmul(pre.F[idx], r[:, :, None])[..., 0]
                 f_n3[idx] = np.where(later, f_new, f_n3[idx])
             todo = idx
-        det.run[:], det.history[:], det.count[:] = run_end, hist_end, count_end
-        det.in_stance[:] = stance[:, -1]
+        det.commit(np.arange(n), DetectorPass(stance, start, end, run_end, hist_end, count_end))
         self.stance_starts += start.sum(axis=1)
 
         # Mean position after the walker's valid samples, then the sigma points at
@@ -680,7 +677,6 @@ class ZuptUkf:
         anchor: NDArray[np.integer],
         t: NDArray[np.integer],
         pre: Preintegrals,
-        sigma: slice = slice(None),
         sigmas: tuple[Array, Array, Array] | None = None,
     ) -> tuple[Array, Array, Array]:
         """Sigma points of walkers ``lanes`` at block sample ``t`` ((B,) or (B, T)),
@@ -689,7 +685,7 @@ class ZuptUkf:
         D_rel, AB_rel, tau = relative_increments(pre, lanes, anchor, t, self.dt)
         if sigmas is None:
             sigmas = (self.sig_C[lanes], self.sig_v[lanes], self.sig_p[lanes])
-        C0, v0, p0 = (x[:, sigma] for x in sigmas)
+        C0, v0, p0 = sigmas
         if np.ndim(t) == 2:
             C0, v0, p0 = C0[:, None], v0[:, None], p0[:, None]
         moved = np.matmul(C0, np.concatenate((D_rel, AB_rel), axis=-1)[..., None, :, :])
