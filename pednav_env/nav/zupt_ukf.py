@@ -635,11 +635,15 @@ class ZuptUkf:
         det.commit(np.arange(n), DetectorPass(stance, start, end, run_end, hist_end, count_end))
         self.stance_starts += start.sum(axis=1)
 
-        # Mean position after the walker's valid samples, then the sigma points at
-        # the block's end (the next block's starting point).
+        # Mean position after each walker's valid samples (computed here for walkers
+        # whose record ends inside the block, below from the block's end for the
+        # others), then the sigma points at the block's end (the next block's start).
         all_lanes = np.arange(n)
-        _, _, p_valid = self._sigmas_at(all_lanes, anchor, valid, pre)
-        position = np.einsum("s,nsd->nd", self.weights.Wm, p_valid)
+        position = np.empty((n, 3))
+        short = all_lanes[valid < k]
+        if short.size:
+            _, _, p_valid = self._sigmas_at(short, anchor[short], valid[short], pre)
+            position[short] = np.einsum("s,nsd->nd", self.weights.Wm, p_valid)
         live = ~frozen
         if live.any():
             lanes = all_lanes[live]
@@ -652,6 +656,8 @@ class ZuptUkf:
             diverged_at[open_[hit]] = bad[hit].argmax(axis=1) + 1
             C, v, p = self._sigmas_at(lanes, anchor[lanes], np.full(lanes.size, k), pre)
             self.sig_C[lanes], self.sig_v[lanes], self.sig_p[lanes] = C, v, p
+        full = valid == k
+        position[full] = np.einsum("s,nsd->nd", self.weights.Wm, self.sig_p[full])
         self.elapsed_s = anchor_elapsed + (k - anchor) * dt
         upd = last_accepted >= 0
         self.time_since_update_s = np.where(
