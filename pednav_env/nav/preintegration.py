@@ -69,6 +69,28 @@ def preintegrate(
     return Preintegrals(D, F, A, B, tau_rate)
 
 
+def block_differences(
+    pre: Preintegrals,
+    lanes: NDArray[np.integer],
+    anchor: NDArray[np.integer],
+    t: NDArray[np.integer],
+    dt: float,
+) -> tuple[Array, Array, Array, Array]:
+    """(D_a, ΔA, ΔB, steps) from block sample ``anchor`` (B,) to ``t`` ((B,) or (B, T))
+    for walkers ``lanes``, still in the block's starting axes: D_a the attitude
+    increment up to the anchor, ΔA = A_t − A_a and ΔB = B_t − B_a − A_a (t − a)Δt.
+    Rotated by D_aᵀ they are the increments from the anchor (:func:`relative_increments`)."""
+    two = np.ndim(t) == 2
+    li = lanes[:, None] if two else lanes
+    Da, Aa, Ba = pre.D[lanes, anchor], pre.A[lanes, anchor], pre.B[lanes, anchor]
+    steps = t - (anchor[:, None] if two else anchor)
+    if two:
+        Aa, Ba = Aa[:, None], Ba[:, None]
+    dA = pre.A[li, t] - Aa
+    dB = pre.B[li, t] - Ba - Aa * (steps * dt)[..., None]
+    return Da, dA, dB, steps
+
+
 def relative_increments(
     pre: Preintegrals,
     lanes: NDArray[np.integer],
@@ -81,13 +103,8 @@ def relative_increments(
     two columns of a ``(..., 3, 2)`` array."""
     two = np.ndim(t) == 2
     li = lanes[:, None] if two else lanes
-    Da, Aa, Ba = pre.D[lanes, anchor], pre.A[lanes, anchor], pre.B[lanes, anchor]
-    steps = t - (anchor[:, None] if two else anchor)
-    if two:
-        Da, Aa, Ba = Da[:, None], Aa[:, None], Ba[:, None]
-    inv = np.swapaxes(Da, -1, -2)
+    Da, dA, dB, steps = block_differences(pre, lanes, anchor, t, dt)
+    inv = np.swapaxes(Da[:, None] if two else Da, -1, -2)
     D_rel = np.matmul(inv, pre.D[li, t])
-    dA = pre.A[li, t] - Aa
-    dB = pre.B[li, t] - Ba - Aa * (steps * dt)[..., None]
     AB_rel = np.matmul(inv, np.stack((dA, dB), axis=-1))
     return D_rel, AB_rel, steps * pre.tau_rate[li]

@@ -65,7 +65,12 @@ from pednav_env.nav.detectors import (
     ShoeDetectorConfig,
     ThresholdDetectorConfig,
 )
-from pednav_env.nav.preintegration import Preintegrals, preintegrate, relative_increments
+from pednav_env.nav.preintegration import (
+    Preintegrals,
+    block_differences,
+    preintegrate,
+    relative_increments,
+)
 from pednav_env.nav.strapdown import advance_sigma, step_increments, step_increments_dcm
 from pednav_env.nav.ukf import (
     MerweWeights,
@@ -709,13 +714,11 @@ class ZuptUkf:
         sample of the block, moved from the redraw at ``anchor``: the attitude
         products C_c D_aᵀ are formed once per walker, not per sample."""
         k = pre.F.shape[1]
-        dt, g = self.dt, self.config.g
-        Da, Aa, Ba = pre.D[lanes, anchor], pre.A[lanes, anchor], pre.B[lanes, anchor]
+        t = np.broadcast_to(np.arange(1, k + 1), (len(lanes), k))
+        Da, dA, dB, steps = block_differences(pre, lanes, anchor, t, self.dt)
         M_T = np.swapaxes(np.matmul(self.sig_C[lanes, 0], np.swapaxes(Da, -1, -2)), -1, -2)
-        steps = np.arange(1, k + 1)[None, :] - anchor[:, None]
         tau = steps * pre.tau_rate[lanes, None]
-        dA = pre.A[lanes, 1:] - Aa[:, None]
-        dB = pre.B[lanes, 1:] - Ba[:, None] - Aa[:, None] * (steps * dt)[..., None]
+        g = self.config.g
         v0, p0 = self.sig_v[lanes, 0, None], self.sig_p[lanes, 0, None]
         v = v0 + np.matmul(dA, M_T)
         v[..., 2] -= g * tau
