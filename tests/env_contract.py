@@ -81,3 +81,23 @@ def assert_lanes_equal_scalar_envs(
         np.testing.assert_array_equal(np.array(got_rew), np.array(lane_rew[i]))
         for key in info_keys:
             np.testing.assert_array_equal(np.array(got_info[key]), np.array(lane_info[i][key]))
+
+
+def assert_ppo_trains_for_2000_steps(env, action_dim: int) -> None:
+    """SB3 PPO learns for 2 000 steps on ``env`` and predicts actions of ``action_dim``."""
+    from stable_baselines3 import PPO
+
+    model = PPO(
+        "MlpPolicy",
+        env,
+        n_steps=256,
+        batch_size=64,
+        n_epochs=2,
+        seed=0,
+        policy_kwargs={"net_arch": [32, 32]},
+        device="cpu",
+    )
+    model.learn(2000)
+    assert model.num_timesteps >= 2000
+    action, _ = model.predict(env.reset(seed=1)[0], deterministic=True)
+    assert action.shape == (action_dim,)

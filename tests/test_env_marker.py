@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from env_contract import (
     assert_lanes_equal_scalar_envs,
+    assert_ppo_trains_for_2000_steps,
     assert_same_seed_same_episode,
     rollout,
 )
@@ -276,20 +277,4 @@ def test_bad_configuration_raises():
 
 
 def test_ppo_trains_for_2000_steps():
-    from stable_baselines3 import PPO
-
-    env = gym.make(ENV_ID, config=SHORT)
-    model = PPO(
-        "MlpPolicy",
-        env,
-        n_steps=256,
-        batch_size=64,
-        n_epochs=2,
-        seed=0,
-        policy_kwargs={"net_arch": [32, 32]},
-        device="cpu",
-    )
-    model.learn(2000)
-    assert model.num_timesteps >= 2000
-    action, _ = model.predict(env.reset(seed=1)[0], deterministic=True)
-    assert action.shape == (4,)
+    assert_ppo_trains_for_2000_steps(gym.make(ENV_ID, config=SHORT), 4)
