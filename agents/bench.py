@@ -14,8 +14,6 @@ JSON: ``{"bench": "foot", "rows": [{"num_envs": 256, "steps_per_s": ..,
 
 from __future__ import annotations
 
-import resource
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -23,6 +21,7 @@ import numpy as np
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 from gymnasium.utils import seeding
 
+from agents.bench_common import DEFAULT_SIZES, bench_result, bench_row, timed_calls
 from agents.bench_marker import bench_marker
 from agents.bench_waist import bench_waist
 from pednav_env.envs.foot_core import FootZuptConfig, generate_episode
@@ -41,8 +40,6 @@ from pednav_env.nav.zupt_ukf import (
     state_to_nav,
 )
 from pednav_env.rotations import quat_rotate
-
-DEFAULT_SIZES = (1, 16, 64, 256)
 
 
 class FilterpyFootReference:
@@ -120,14 +117,6 @@ class FilterpyFootReference:
             self.cursor += 1
 
 
-def _timed(step: Callable[[], None], min_seconds: float, min_calls: int) -> tuple[int, float]:
-    calls, start = 0, time.perf_counter()
-    while calls < min_calls or time.perf_counter() - start < min_seconds:
-        step()
-        calls += 1
-    return calls, time.perf_counter() - start
-
-
 def bench_foot(
     sizes: tuple[int, ...] = DEFAULT_SIZES,
     min_seconds: float = 3.0,
@@ -142,25 +131,15 @@ def bench_foot(
         env.reset(seed=0)
         zeros = np.zeros((n, config.action_dim), np.float32)
         env.step(zeros)  # warm-up
-        calls, elapsed = _timed(lambda env=env, z=zeros: env.step(z), min_seconds, 3)
-        native = n * calls / elapsed
+        calls, elapsed = timed_calls(lambda env=env, z=zeros: env.step(z), min_seconds, 3)
         refs = [FilterpyFootReference(config, seed=i) for i in range(n)]
         # ≥ 3 rounds: the first interval after alignment is mostly standing (few
         # corrections), so one round alone would flatter the reference.
-        ref_calls, ref_elapsed = _timed(
+        ref_calls, ref_elapsed = timed_calls(
             lambda refs=refs: [r.step() for r in refs], reference_seconds, 3
         )
-        reference = n * ref_calls / ref_elapsed
-        rows.append(
-            {
-                "num_envs": n,
-                "steps_per_s": native,
-                "reference_steps_per_s": reference,
-                "ratio": native / reference,
-            }
-        )
-    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    return {"bench": "foot", "rows": rows, "peak_rss_mb": peak_mb}
+        rows.append(bench_row(n, calls, elapsed, ref_calls, ref_elapsed))
+    return bench_result("foot", rows)
 
 
 BENCHES: dict[str, Callable[..., dict[str, Any]]] = {

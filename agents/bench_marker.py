@@ -22,7 +22,6 @@ JSON: ``{"bench": "marker", "rows": [{"num_envs": 256, "steps_per_s": ..,
 
 from __future__ import annotations
 
-import resource
 import time
 from collections.abc import Callable
 from typing import Any
@@ -33,6 +32,7 @@ from gymnasium.utils import seeding
 from numpy.typing import NDArray
 from scipy.linalg import solve_triangular
 
+from agents.bench_common import DEFAULT_SIZES, bench_result, bench_row
 from pednav_env.envs.marker_core import MarkerTrackConfig, MarkerTrackCore
 from pednav_env.envs.marker_track import ENV_ID, MarkerTrackVectorEnv
 from pednav_env.nav.marker_ekf import (
@@ -42,8 +42,6 @@ from pednav_env.nav.marker_ekf import (
     marker_jacobian,
     marker_measurement,
 )
-
-DEFAULT_SIZES = (1, 16, 64, 256)
 
 
 class FilterpyMarkerEngine:
@@ -205,15 +203,5 @@ def bench_marker(
             min_seconds,
             reference_seconds,
         )
-        native = n * calls / elapsed
-        reference = n * ref_calls / ref_elapsed
-        rows.append(
-            {
-                "num_envs": n,
-                "steps_per_s": native,
-                "reference_steps_per_s": reference,
-                "ratio": native / reference,
-            }
-        )
-    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    return {"bench": "marker", "rows": rows, "peak_rss_mb": peak_mb}
+        rows.append(bench_row(n, calls, elapsed, ref_calls, ref_elapsed))
+    return bench_result("marker", rows)

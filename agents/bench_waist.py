@@ -21,13 +21,13 @@ JSON: ``{"bench": "waist", "rows": [{"num_envs": 256, "steps_per_s": ..,
 
 from __future__ import annotations
 
-import resource
 from typing import Any
 
 import numpy as np
 from filterpy.kalman import KalmanFilter
 from gymnasium.utils import seeding
 
+from agents.bench_common import DEFAULT_SIZES, bench_result, bench_row, timed_calls
 from pednav_env.envs.waist_core import WaistStepConfig, generate_episode
 from pednav_env.envs.waist_step import WaistStepVectorEnv
 from pednav_env.nav.step_fusion_kf import H_DV
@@ -38,8 +38,6 @@ from pednav_env.nav.waist_dr import (
     detect_steps,
 )
 from pednav_env.sensors.ins_error import CHANNEL_SIGN, schuler_transition
-
-DEFAULT_SIZES = (1, 16, 64, 256)
 
 
 class FilterpyWaistReference:
@@ -156,16 +154,6 @@ class FilterpyWaistReference:
         return False
 
 
-def _timed(step, min_seconds: float, min_calls: int) -> tuple[int, float]:
-    import time
-
-    calls, start = 0, time.perf_counter()
-    while calls < min_calls or time.perf_counter() - start < min_seconds:
-        step()
-        calls += 1
-    return calls, time.perf_counter() - start
-
-
 def bench_waist(
     sizes: tuple[int, ...] = DEFAULT_SIZES,
     min_seconds: float = 3.0,
@@ -180,21 +168,11 @@ def bench_waist(
         env.reset(seed=0)
         zeros = np.zeros((n, config.action_dim), np.float32)
         env.step(zeros)  # warm-up
-        calls, elapsed = _timed(lambda env=env, z=zeros: env.step(z), min_seconds, 3)
-        native = n * calls / elapsed
+        calls, elapsed = timed_calls(lambda env=env, z=zeros: env.step(z), min_seconds, 3)
         env.close()
         refs = [FilterpyWaistReference(config, seed=i) for i in range(n)]
-        ref_calls, ref_elapsed = _timed(
+        ref_calls, ref_elapsed = timed_calls(
             lambda refs=refs: [r.step() for r in refs], reference_seconds, 1
         )
-        reference = n * ref_calls / ref_elapsed
-        rows.append(
-            {
-                "num_envs": n,
-                "steps_per_s": native,
-                "reference_steps_per_s": reference,
-                "ratio": native / reference,
-            }
-        )
-    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    return {"bench": "waist", "rows": rows, "peak_rss_mb": peak_mb}
+        rows.append(bench_row(n, calls, elapsed, ref_calls, ref_elapsed))
+    return bench_result("waist", rows)
