@@ -214,25 +214,39 @@ class FootZuptCore:
         )
 
     # ------------------------------------------------------------------ reset
+    def load_lane(
+        self,
+        lane: int,
+        omega_b: Array,
+        f_b: Array,
+        pos_n: Array,
+        stance: NDArray[np.bool_],
+        distance_m: Array,
+    ) -> None:
+        """Copy one walk's IMU record ``(T, 3)`` and truth (positions and distance
+        ``(T+1, ·)``, stance ``(T,)``) into ``lane``'s buffers; past the end the
+        lane stands still at its last position."""
+        t = omega_b.shape[0]
+        self.omega[lane] = 0.0
+        self.f[lane] = 0.0
+        self.f[lane, :, 2] = self.config.filter.g
+        self.omega[lane, :t] = omega_b
+        self.f[lane, :t] = f_b
+        self.pos[lane, : t + 1] = pos_n
+        self.pos[lane, t + 1 :] = pos_n[-1]
+        self.true_stance[lane] = True
+        self.true_stance[lane, :t] = stance
+        self.distance[lane, : t + 1] = distance_m
+        self.distance[lane, t + 1 :] = distance_m[-1]
+        self.length[lane] = t
+
     def reset_lanes(self, lanes: NDArray[np.integer], rngs: list[np.random.Generator]) -> None:
         """Start new episodes in ``lanes``, each drawn from its own generator."""
         lanes = np.asarray(lanes, dtype=np.int64)
         c = self.config
         for lane, rng in zip(lanes, rngs, strict=True):
             ep = generate_episode(c, rng)
-            t = ep.omega_b.shape[0]
-            self.omega[lane] = 0.0
-            self.f[lane] = 0.0
-            self.f[lane, :, 2] = c.filter.g
-            self.omega[lane, :t] = ep.omega_b
-            self.f[lane, :t] = ep.f_b
-            self.pos[lane, : t + 1] = ep.pos_n
-            self.pos[lane, t + 1 :] = ep.pos_n[-1]
-            self.true_stance[lane] = True
-            self.true_stance[lane, :t] = ep.stance
-            self.distance[lane, : t + 1] = ep.distance_m
-            self.distance[lane, t + 1 :] = ep.distance_m[-1]
-            self.length[lane] = t
+            self.load_lane(lane, ep.omega_b, ep.f_b, ep.pos_n, ep.stance, ep.distance_m)
             self.grade[lane] = ep.imu_grade
         mask = np.zeros(self.n, dtype=bool)
         mask[lanes] = True

@@ -234,24 +234,11 @@ class FootReplayCore(FootZuptCore):
     def reset_lanes(self, lanes: NDArray[np.integer], rngs: list[np.random.Generator]) -> None:
         """Start new episodes in ``lanes``: trial drawn from each lane's generator."""
         lanes = np.asarray(lanes, dtype=np.int64)
-        g = self.config.filter.g
         for lane, rng in zip(lanes, rngs, strict=True):
             i = int(rng.integers(self.num_trials))
             tr = self._trial(i)
             p = tr.prepared
-            t = p.num_samples
-            self.omega[lane] = 0.0
-            self.f[lane] = 0.0
-            self.f[lane, :, 2] = g
-            self.omega[lane, :t] = p.omega_b
-            self.f[lane, :t] = p.f_b
-            self.pos[lane, : t + 1] = tr.pos_n
-            self.pos[lane, t + 1 :] = tr.pos_n[-1]
-            self.true_stance[lane] = True
-            self.true_stance[lane, :t] = tr.stance
-            self.distance[lane, : t + 1] = tr.distance_m
-            self.distance[lane, t + 1 :] = tr.distance_m[-1]
-            self.length[lane] = t
+            self.load_lane(lane, p.omega_b, p.f_b, tr.pos_n, tr.stance, tr.distance_m)
             self.grade[lane] = "recorded"
             self.trial_index[lane] = i
             self.trial_name[lane] = tr.name
@@ -264,7 +251,7 @@ class FootReplayCore(FootZuptCore):
                 self.f[lane : lane + 1, :na], mask, omega_align_b=self.omega[lane : lane + 1, :na]
             )
             self.cursor[lane] = na
-            self.nav_samples[lane] = max(t - na, 1)
+            self.nav_samples[lane] = max(p.num_samples - na, 1)
         self.action[lanes] = 0.0
         self.clipped[lanes] = 0
         self.stance_avg_s[lanes] = 0.0
