@@ -88,11 +88,10 @@ def test_alignment_rejects_bad_input():
 
 
 def test_preintegrated_increments_equal_sample_by_sample_strapdown():
-    """Moving a state from sample a to t by the preintegrals (C₀D, v₀ + C₀A − gτe₃,
-    x₀ + v₀τ + C₀B − ½gτ²e₃) is the strapdown of eq (3) run over samples a … t−1,
-    for any a < t of a block, to rounding."""
-    from pednav_env.nav.preintegration import preintegrate, relative_increments
-    from pednav_env.nav.strapdown import step_increments_dcm
+    """Moving states from sample a to t by the ZUPT kernel's preintegrals (C₀D,
+    v₀ + C₀A − gτe₃, x₀ + v₀τ + C₀B − ½gτ²e₃, accumulated sample by sample) is
+    the strapdown of eq (3) run over samples a … t−1, to rounding."""
+    from pednav_env.nav.zupt_kernel import _accumulate, _increment, _move_sigmas
     from pednav_env.rotations import quat_to_dcm
 
     rate = 100.0
@@ -100,18 +99,19 @@ def test_preintegrated_increments_equal_sample_by_sample_strapdown():
     tr = simulate_foot(square_route(3.0, paper_stride_shape(1.0)), FootSimConfig(rate_hz=rate))
     s0, k = 250, 60  # a block inside the walk: swing and stance
     omega, f = tr.omega_b[:, s0 : s0 + k], tr.f_b[:, s0 : s0 + k]
-    pre = preintegrate(*step_increments_dcm(omega, f, dt), dt)
-    lanes = np.zeros(1, dtype=int)
     g = 9.80665
+    dC, f_mid, F = np.empty((3, 3)), np.empty(3), np.empty(3)
     for a, t in ((0, k), (7, 41), (33, 34)):
         q0 = euler_to_quat(tr.euler[:, s0 + a])
         v0, p0 = tr.vel_n[:, s0 + a], tr.pos_n[:, s0 + a]
         q, v, p = integrate(q0, v0, p0, omega[:, a:t], f[:, a:t], dt, g)
-        D, AB, tau = relative_increments(pre, lanes, np.array([a]), np.array([t]), dt)
-        C0 = quat_to_dcm(q0)
-        C_t = C0 @ D
-        v_t = v0 + (C0 @ AB[..., 0:1])[..., 0] - [0.0, 0.0, g * tau[0]]
-        p_t = p0 + v0 * tau[0] + (C0 @ AB[..., 1:2])[..., 0] - [0.0, 0.0, 0.5 * g * tau[0] ** 2]
+        D, A, B = np.eye(3), np.zeros(3), np.zeros(3)
+        for j in range(a, t):
+            _increment(omega[0, j].copy(), f[0, j].copy(), dt, dC, f_mid)
+            F[:] = D @ f_mid
+            _accumulate(D, A, B, F, dC, dt)
+        C_t, v_t, p_t = quat_to_dcm(q0), v0.copy(), p0.copy()  # (1, 3, 3), (1, 3), (1, 3)
+        _move_sigmas(C_t, v_t, p_t, D, A, B, (t - a) * dt, g)
         np.testing.assert_allclose(C_t, quat_to_dcm(q[:, -1]), rtol=0, atol=1e-12)
         np.testing.assert_allclose(v_t, v[:, -1], rtol=0, atol=1e-12)
         np.testing.assert_allclose(p_t, p[:, -1], rtol=0, atol=1e-12)

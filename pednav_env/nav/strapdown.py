@@ -23,7 +23,6 @@ from pednav_env.rotations import (
     quat_from_rotvec,
     quat_multiply,
     quat_rotate,
-    quat_to_dcm,
     right_product_matrix,
 )
 
@@ -81,12 +80,6 @@ def step_increments(omega_b: Array, f_b: Array, dt: float) -> tuple[Array, Array
     """Per-sample quantities shared by all states of a walker: (Mᵀ of Δq, f_mid)."""
     dq_matrix_T = np.swapaxes(right_product_matrix(quat_from_rotvec(omega_b * dt)), -1, -2)
     return dq_matrix_T, rotation_compensated_force(omega_b, f_b, dt)
-
-
-def step_increments_dcm(omega_b: Array, f_b: Array, dt: float) -> tuple[Array, Array]:
-    """(C(Δq), f_mid) per sample: the attitude increment as a rotation matrix
-    (C(q ⊗ Δq) = C(q) C(Δq)) and the compensated specific force."""
-    return quat_to_dcm(quat_from_rotvec(omega_b * dt)), rotation_compensated_force(omega_b, f_b, dt)
 
 
 def integrate(

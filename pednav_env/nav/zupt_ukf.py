@@ -10,18 +10,16 @@ start and stance end (eq 5 or SHOE) with
 
 One engine for every walker: :class:`ZuptUkf` holds the sigma points of N
 walkers, ``(N, 2L+1, ·)``, and :meth:`ZuptUkf.advance` moves all of them
-through a block of K IMU samples (one decision interval of the env). Between
-two ZUPTs a walker's sigma points only follow the strapdown, which is affine
-in the starting state, so they are moved from their last redraw straight to
-the next ZUPT by preintegrated increments of the walker's IMU record
-(:mod:`pednav_env.nav.preintegration`), not sample by sample. The ZUPTs run
-in rounds: every walker's first detected stance start or end of the block,
-as one batched unscented update, then every walker's second, and so on; after
-each round the detector is re-evaluated for the updated walkers, because
-eq (5) reads the vertical specific force through the corrected attitude.
-No Python loop runs over walkers or sigma points; :meth:`ZuptUkf.step` is
-the same call with K = 1, and the result depends on the blocking only
-through rounding (tested).
+through a block of K IMU samples (one decision interval of the env) in one
+call of the compiled kernel :func:`pednav_env.nav.zupt_kernel.advance_block`,
+which runs walker after walker, sample after sample. Between two ZUPTs a
+walker's sigma points only follow the strapdown, which is affine in the
+starting state, so they are moved from their last redraw straight to the next
+ZUPT by preintegrated increments of the walker's IMU record, not sample by
+sample (the kernel's module docstring). After a ZUPT the detector reads the
+vertical specific force of eq (5) through the corrected attitude.
+:meth:`ZuptUkf.step` is the same call with K = 1, and the result depends on
+the blocking only through rounding (tested).
 
 Divergence (a non-finite state or a speed above :data:`DIVERGENCE_SPEED` of
 the central sigma point) is checked on the prior of every ZUPT and at every
@@ -42,7 +40,7 @@ Choices the paper leaves open (docs/REPRODUCTION.md):
   redrawn from the prior (which includes Q), not the propagated ones the
   paper prints (which would leave Q out of S); with the linear h the update
   is then exactly the Kalman update on the unscented prior, which is how it
-  is computed (:func:`pednav_env.nav.ukf.update_linear`, no second draw);
+  is computed (no second draw; the filterpy oracle test checks the equality);
 - optional χ² gating of a ZUPT on its NIS (off in the paper scenario).
 """
 
@@ -60,26 +58,14 @@ from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.nav.alignment import align_static
 from pednav_env.nav.detectors import (
     DetectorConfig,
-    DetectorPass,
     OnlineStanceDetector,
     ShoeDetectorConfig,
     ThresholdDetectorConfig,
 )
-from pednav_env.nav.preintegration import (
-    Preintegrals,
-    block_differences,
-    preintegrate,
-    relative_increments,
-)
-from pednav_env.nav.strapdown import advance_sigma, step_increments, step_increments_dcm
-from pednav_env.nav.ukf import (
-    MerweWeights,
-    repair_covariance,
-    sigma_points,
-    update_linear,
-)
+from pednav_env.nav.strapdown import advance_sigma, step_increments
+from pednav_env.nav.ukf import MerweWeights, repair_covariance
+from pednav_env.nav.zupt_kernel import advance_block, redraw_sigmas
 from pednav_env.rotations import (
-    euler_to_dcm,
     euler_to_quat,
     quat_to_euler,
     wrap_angle,
@@ -130,21 +116,6 @@ def state_mean(sigmas: Array, Wm: Array) -> Array:
     ref = sigmas[..., 0, :]
     d = state_residual(sigmas, ref[..., None, :])
     return state_add(ref, np.einsum("s,...sd->...d", Wm, d))
-
-
-def prior_moments(sigmas: Array, weights: MerweWeights, Q: Array) -> tuple[Array, Array]:
-    """Unscented transform of sigma points ``(B, S, 9)`` with wrapped angles,
-    plus process noise: the same mean and covariance as
-    ``unscented_transform(sigmas, weights, Q, state_mean, state_residual)``
-    (filterpy's ``x_mean_fn`` / ``residual_x``), with the residuals from the
-    central point (as in :func:`state_mean`) computed once."""
-    ref = sigmas[:, 0, :]
-    d = state_residual(sigmas, ref[:, None, :])
-    mean_d = np.matmul(weights.Wm, d)
-    x = state_add(ref, mean_d)
-    y = state_residual(d, mean_d[:, None, :])  # = sigmas − x, wrapped
-    P = np.matmul(np.swapaxes(y * weights.Wc[:, None], -1, -2), y) + Q
-    return x, P
 
 
 def state_to_nav(y: Array) -> tuple[Array, Array, Array]:
@@ -325,20 +296,6 @@ class BlockResult:
     states: Array | None  # (N, K, 9) mean state after each sample (record="state")
 
 
-def _diverging(C: Array, v: Array, p: Array) -> NDArray[np.bool_]:
-    """Walkers ``(..., ·)`` (central sigma point) that have diverged: a non-finite
-    state or a speed above :data:`DIVERGENCE_SPEED`."""
-    speed2 = np.einsum("...i,...i->...", v, v)
-    bad = ~np.isfinite(speed2) | (speed2 > DIVERGENCE_SPEED**2)
-    return bad | ~np.isfinite(C).all(axis=(-2, -1)) | ~np.isfinite(p).all(axis=-1)
-
-
-def state_to_dcm(y: Array) -> tuple[Array, Array, Array]:
-    """(C_nb, v, x) from state vectors ``(..., 9)`` (the engine's sigma-point form;
-    v and x are views into ``y``)."""
-    return euler_to_dcm(y[..., [8, 6, 7]]), y[..., 3:6], y[..., 0:3]
-
-
 def dcm_to_state(C_nb: Array, vel_n: Array, pos_n: Array) -> Array:
     """State vectors ``(..., 9)`` from attitude matrix, velocity and position."""
     y = np.empty(np.broadcast_shapes(C_nb.shape[:-2], vel_n.shape[:-1]) + (STATE_DIM,))
@@ -348,13 +305,6 @@ def dcm_to_state(C_nb: Array, vel_n: Array, pos_n: Array) -> Array:
     y[..., 7] = np.arctan2(C_nb[..., 2, 1], C_nb[..., 2, 2])
     y[..., 8] = np.arctan2(C_nb[..., 1, 0], C_nb[..., 0, 0])
     return y
-
-
-def _vertical_row(C_central: Array, D_anchor: Array) -> Array:
-    """Row r with f'_x3 = r · F_j for the block's samples after a redraw at
-    ``D_anchor``: e₃ᵀ C_c D_aᵀ, i.e. D_a C_cᵀ e₃ (paper 003 eq 5's vertical
-    specific force from the central sigma point's attitude C_c)."""
-    return np.matmul(D_anchor, C_central[..., 2, :, None])[..., 0]
 
 
 @dataclass
@@ -433,6 +383,19 @@ class ZuptUkf:
         self.last_nis = np.zeros(n)
         self.time_since_update_s = np.zeros(n)
         self.gyro_bias = np.zeros((n, 3))
+        self._Wm, self._Wc = self.weights.Wm, self.weights.Wc
+        self._kernel_params = np.array(
+            [
+                self.dt,
+                config.g,
+                det.g,
+                np.inf if self.gate_nis is None else self.gate_nis,
+                float(self.uses_shoe),
+                float(config.update_mode is UpdateMode.STANCE_BOUNDARIES),
+                STATE_DIM + self.weights.lam,
+                DIVERGENCE_SPEED,
+            ]
+        )
 
     # ------------------------------------------------------------------ init
     def initial_state(self, euler0: Array) -> tuple[Array, Array]:
@@ -480,39 +443,28 @@ class ZuptUkf:
 
     def set_state(self, idx: NDArray[np.integer], x: Array, P: Array) -> None:
         """Set mean and covariance of walkers ``idx`` and draw their sigma points."""
-        chi, bad = sigma_points(x, P, self.weights, add_fn=state_add)
+        idx = np.asarray(idx, dtype=np.int64)
+        x = np.ascontiguousarray(x, dtype=float)
+        P = np.ascontiguousarray(P, dtype=float)
+        spread = STATE_DIM + self.weights.lam
+        bad = redraw_sigmas(idx, x, P, spread, self.sig_C, self.sig_v, self.sig_p)
         self.repairs[idx] += bad
         self.x[idx], self.P[idx] = x, P
-        self.sig_C[idx], self.sig_v[idx], self.sig_p[idx] = state_to_dcm(chi)
         self.elapsed_s[idx] = 0.0
 
     # ------------------------------------------------------------------ step
-    def increments(self, omega_b: Array, f_b: Array) -> tuple[Array, Array, Array]:
-        """Per-sample quantities shared by a walker's sigma points, for any
-        number of samples at once: bias-corrected rate, attitude increment
-        C(Δq) as a matrix, specific force at mid-interval attitude
-        (``omega_b``/``f_b`` (N, ..., 3))."""
-        bias = self.gyro_bias.reshape((self.n,) + (1,) * (omega_b.ndim - 2) + (3,))
-        omega_c = omega_b - bias
-        dC, f_mid = step_increments_dcm(omega_c, f_b, self.dt)
-        return omega_c, dC, f_mid
-
     def step(
         self,
         omega_b: Array,
         f_b: Array,
         shoe_statistic: Array | None = None,
-        increments: tuple[Array, Array, Array] | None = None,
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         """Advance all walkers by one IMU sample ``(N, 3)`` each (:meth:`advance`
         with one sample). Returns the detected (stance_start, stance_end) events."""
-        if increments is not None:
-            increments = tuple(x[:, None] for x in increments)  # type: ignore[assignment]
         res = self.advance(
             np.asarray(omega_b, dtype=float)[:, None],
             np.asarray(f_b, dtype=float)[:, None],
             None if shoe_statistic is None else np.asarray(shoe_statistic)[:, None],
-            increments=increments,
         )
         return res.start[:, 0], res.end[:, 0]
 
@@ -522,24 +474,21 @@ class ZuptUkf:
         f_b: Array,
         shoe_statistic: Array | None = None,
         valid: NDArray[np.integer] | None = None,
-        increments: tuple[Array, Array, Array] | None = None,
         record: str | None = None,
     ) -> BlockResult:
         """Advance all walkers through a block of K IMU samples ``(N, K, 3)``.
 
-        The same filter as one sample at a time — detector, ZUPT at every
+        The filter of the module docstring, run by the compiled per-walker kernel
+        :func:`pednav_env.nav.zupt_kernel.advance_block`: detector, ZUPT at every
         detected stance start and end, strapdown of every sigma point between
-        them — computed in a few batched passes (module docstring of
-        :mod:`pednav_env.nav.preintegration`): the sigma points of a walker are
-        moved to any sample of the block from its last redraw through the
-        walker's preintegrated increments, and the updates of all walkers run
-        together in rounds (every walker's first event of the block, then every
-        walker's second, …). Walker ``i`` only processes its first ``valid[i]``
-        samples' events (the rest is padding after the end of its record).
-        ``record`` = ``"position"`` or ``"state"`` also returns the mean after
-        every sample.
+        them (moved from the last redraw by preintegrated increments). Walker
+        ``i`` only processes its first ``valid[i]`` samples' events (the rest is
+        padding after the end of its record). ``record`` = ``"position"`` or
+        ``"state"`` also returns the mean after every sample.
         """
         n = self.n
+        omega_b = np.ascontiguousarray(omega_b, dtype=float)
+        f_b = np.ascontiguousarray(f_b, dtype=float)
         if omega_b.ndim != 3 or omega_b.shape[0] != n or omega_b.shape[2] != 3:
             raise ValueError(f"omega_b must be ({n}, K, 3), got {omega_b.shape}")
         if f_b.shape != omega_b.shape:
@@ -547,184 +496,127 @@ class ZuptUkf:
         if record not in (None, "position", "state"):
             raise ValueError(f"record must be None, 'position' or 'state', got {record!r}")
         k = omega_b.shape[1]
-        dt = self.dt
-        if increments is None:
-            increments = self.increments(omega_b, f_b)
-        omega_c, dC, f_mid = increments
         if self.uses_shoe and shoe_statistic is None:
             raise ValueError("the SHOE detector needs shoe_statistic for each sample")
         valid = np.full(n, k) if valid is None else np.asarray(valid, dtype=np.int64)
         if valid.shape != (n,) or valid.min() < 0 or valid.max() > k:
             raise ValueError(f"valid must be ({n},) sample counts in [0, {k}], got {valid!r}")
-        frozen = self.diverged.copy()
-        pre = preintegrate(dC, f_mid, dt, frozen)
-        kidx = np.arange(k)
-        boundaries = self.config.update_mode is UpdateMode.STANCE_BOUNDARIES
-        anchor = np.zeros(n, dtype=np.int64)  # sample of each walker's last redraw
-        anchor_elapsed = self.elapsed_s.copy()  # time since the redraw before that anchor
-        next_from = np.zeros(n, dtype=np.int64)
-        diverged_at = np.full(n, k + 1)  # state index t (after sample t−1); k+1 = none
-        last_accepted = np.full(n, -1)
-        nis_log_sum = np.zeros(n)
-        accepted_count = np.zeros(n, dtype=np.int64)
+        if self.uses_shoe:
+            shoe_cond = np.asarray(shoe_statistic) <= self.shoe_threshold[:, None]
+            if shoe_cond.shape != (n, k):
+                raise ValueError(f"shoe_statistic must be ({n}, {k}), got {shoe_cond.shape}")
+        else:
+            shoe_cond = np.zeros((n, 0), dtype=bool)
+        lane_params = np.empty((n, 6))
+        lane_params[:, 0] = self.omega_max
+        lane_params[:, 1] = self.delta_f_max
+        lane_params[:, 2] = self.process_noise_scale
+        lane_params[:, 3] = self.zupt_noise_base[0, 0] * self.zupt_noise_scale
+        lane_params[:, 4] = self.zupt_noise_base[1, 1] * self.zupt_noise_scale
+        lane_params[:, 5] = self.height_ref
         stance = np.zeros((n, k), dtype=bool)
         start = np.zeros((n, k), dtype=bool)
         end = np.zeros((n, k), dtype=bool)
-        det = self.detector
-        run_end = np.zeros(n, dtype=np.int64)
-        hist_end = np.zeros_like(det.history)
-        count_end = np.zeros(n, dtype=np.int64)
-        anchors: list[tuple[NDArray[np.int64], NDArray[np.int64], Array, Array, Array]] = []
-        if record is not None:
-            start_sigmas = (self.sig_C.copy(), self.sig_v.copy(), self.sig_p.copy())
-            anchors.append((np.arange(n), anchor.copy(), *start_sigmas))
-        if self.uses_shoe:
-            shoe_cond = np.asarray(shoe_statistic) <= self.shoe_threshold[:, None]
-        else:
-            omega_norm = np.sqrt(np.einsum("nki,nki->nk", omega_c, omega_c))
-            # f'_x3 at sample j = e₃ᵀ C_c,j f_mid,j = r · F_j, with the row r from the
-            # central sigma point's attitude at the walker's last redraw.
-            r = _vertical_row(self.sig_C[:, 0], pre.D[:, 0])
-            f_n3 = np.matmul(pre.F, r[:, :, None])[..., 0]
-        todo = np.arange(n)
-        while todo.size:
-            if self.uses_shoe:
-                res = det.evaluate_condition(todo, shoe_cond[todo], self.min_stance_s[todo])
-            else:
-                res = det.evaluate_threshold(
-                    todo,
-                    omega_norm[todo],
-                    f_n3[todo],
-                    self.omega_max[todo],
-                    self.delta_f_max[todo],
-                    self.min_stance_s[todo],
-                )
-            stance[todo], start[todo], end[todo] = res.stance, res.start, res.end
-            run_end[todo], hist_end[todo], count_end[todo] = res.run, res.history, res.count
-            ev = (res.start | res.end) if boundaries else (res.stance | res.end)
-            ev &= (kidx >= next_from[todo, None]) & (kidx < valid[todo, None])
-            ev &= ~frozen[todo, None]
-            has = ev.any(axis=1)
-            idx, e = todo[has], ev[has].argmax(axis=1)
-            if idx.size == 0:
-                break
-            C, v, p = self._sigmas_at(idx, anchor[idx], e, pre)
-            # A walker whose prior is non-finite or too fast diverged: no more ZUPTs.
-            bad = _diverging(C[:, 0], v[:, 0], p[:, 0])
-            if bad.any():
-                diverged_at[idx[bad]] = e[bad]
-                ok = ~bad
-                idx, e, C, v, p = idx[ok], e[ok], C[ok], v[ok], p[ok]
-                if idx.size == 0:
-                    break
-            elapsed = anchor_elapsed[idx] + (e - anchor[idx]) * dt
-            kinds = (
-                np.where(start[idx, e], "start", np.where(end[idx, e], "end", "stance"))
-                if self.record_updates
-                else None
-            )
-            accepted, nis = self._update(idx, C, v, p, elapsed, kinds, self.sample[idx] + e)
-            anchor[idx], anchor_elapsed[idx], next_from[idx] = e, 0.0, e + 1
-            nis_log_sum[idx] += np.where(accepted, np.log1p(nis), 0.0)
-            accepted_count[idx] += accepted
-            last_accepted[idx[accepted]] = e[accepted]
-            if record is not None:
-                anchors.append((idx, e.copy(), self.sig_C[idx], self.sig_v[idx], self.sig_p[idx]))
-            if not self.uses_shoe:
-                # samples after the ZUPT see the corrected attitude
-                r = _vertical_row(self.sig_C[idx, 0], pre.D[idx, e])
-                later = kidx[None, :] > e[:, None]
-                f_new = np.matmul(pre.F[idx], r[:, :, None])[..., 0]
-                f_n3[idx] = np.where(later, f_new, f_n3[idx])
-            todo = idx
-        det.commit(np.arange(n), DetectorPass(stance, start, end, run_end, hist_end, count_end))
-        self.stance_starts += start.sum(axis=1)
-
-        # Mean position after each walker's valid samples (computed here for walkers
-        # whose record ends inside the block, below from the block's end for the
-        # others), then the sigma points at the block's end (the next block's start).
-        all_lanes = np.arange(n)
+        accepted = np.zeros(n, dtype=np.int64)
+        nis_log_sum = np.zeros(n)
         position = np.empty((n, 3))
-        short = all_lanes[valid < k]
-        if short.size:
-            _, _, p_valid = self._sigmas_at(short, anchor[short], valid[short], pre)
-            position[short] = np.einsum("s,nsd->nd", self.weights.Wm, p_valid)
-        live = ~frozen
-        if live.any():
-            lanes = all_lanes[live]
-            # every sample after the last ZUPT: first non-finite or too fast state
-            open_ = lanes[diverged_at[lanes] > k]
-            v, p = self._central_track(open_, anchor[open_], pre)
-            bad = _diverging(self.sig_C[open_, None, 0], v, p)
-            bad &= np.arange(1, k + 1)[None, :] > anchor[open_, None]
-            hit = bad.any(axis=1)
-            diverged_at[open_[hit]] = bad[hit].argmax(axis=1) + 1
-            C, v, p = self._sigmas_at(lanes, anchor[lanes], np.full(lanes.size, k), pre)
-            self.sig_C[lanes], self.sig_v[lanes], self.sig_p[lanes] = C, v, p
-        full = valid == k
-        position[full] = np.einsum("s,nsd->nd", self.weights.Wm, self.sig_p[full])
-        self.elapsed_s = anchor_elapsed + (k - anchor) * dt
+        diverged_at = np.empty(n, dtype=np.int64)
+        last_accepted = np.empty(n, dtype=np.int64)
+        positions = np.empty((n, k, 3) if record is not None else (0, 0, 3))
+        states = np.empty((n, k, STATE_DIM) if record == "state" else (0, 0, STATE_DIM))
+        logs = n * k if self.record_updates else 0
+        log_index = np.zeros((logs, 4), dtype=np.int64)
+        log_x = np.empty((logs, 2, STATE_DIM))
+        log_P = np.empty((logs, 2, STATE_DIM, STATE_DIM))
+        log_nis = np.empty(logs)
+        counters = np.stack((self.updates, self.rejected, self.repairs), axis=1)
+        frozen = self.diverged.copy()
+        n_log = advance_block(
+            omega_b,
+            f_b,
+            shoe_cond,
+            valid,
+            frozen,
+            self._kernel_params,
+            lane_params,
+            self.detector.min_samples(self.min_stance_s),
+            self.gyro_bias,
+            self.q_basis,
+            self._Wm,
+            self._Wc,
+            self.sig_C,
+            self.sig_v,
+            self.sig_p,
+            self.x,
+            self.P,
+            self.elapsed_s,
+            self.detector.history,
+            self.detector.count,
+            self.detector.run,
+            self.detector.in_stance,
+            counters,
+            self.last_nis,
+            stance,
+            start,
+            end,
+            accepted,
+            nis_log_sum,
+            position,
+            diverged_at,
+            last_accepted,
+            positions,
+            states,
+            log_index,
+            log_x,
+            log_P,
+            log_nis,
+        )
+        self.updates[:], self.rejected[:], self.repairs[:] = counters.T
+        self.stance_starts += start.sum(axis=1)
         upd = last_accepted >= 0
         self.time_since_update_s = np.where(
-            upd, (k - last_accepted) * dt, self.time_since_update_s + k * dt
+            upd, (k - last_accepted) * self.dt, self.time_since_update_s + k * self.dt
         )
+        if n_log:
+            kinds = ("start", "end", "stance")
+            for (w, j, kind, ok), xs, Ps, nis in zip(
+                log_index[:n_log], log_x, log_P, log_nis, strict=False
+            ):
+                self.history.append(
+                    UpdateRecord(
+                        int(w),
+                        int(self.sample[w] + j),
+                        kinds[kind],
+                        xs[0].copy(),
+                        Ps[0].copy(),
+                        xs[1].copy(),
+                        Ps[1].copy(),
+                        float(nis),
+                        bool(ok),
+                    )
+                )
         self.sample += k
         newly = diverged_at <= k
         if newly.any():
-            self._freeze(all_lanes[newly])
-            frozen_pos = self.mean_position()
+            # frozen at the last posterior from the state where they diverged on
+            self._freeze(np.flatnonzero(newly))
             held = newly & (diverged_at <= valid)
-            position[held] = frozen_pos[held]
-        positions = states = None
-        if record is not None:
-            positions, states = self._record(anchors, pre, k, record, diverged_at)
+            position[held] = self.mean_position()[held]
+            if record is not None:
+                hold = np.arange(1, k + 1)[None, :] >= diverged_at[:, None]
+                positions = np.where(hold[..., None], self.mean_position()[:, None, :], positions)
+                if record == "state":
+                    states = np.where(hold[..., None], self.mean_state()[:, None, :], states)
         return BlockResult(
-            stance, start, end, accepted_count, nis_log_sum, position, positions, states
+            stance,
+            start,
+            end,
+            accepted,
+            nis_log_sum,
+            position,
+            positions if record is not None else None,
+            states if record == "state" else None,
         )
-
-    def _sigmas_at(
-        self,
-        lanes: NDArray[np.integer],
-        anchor: NDArray[np.integer],
-        t: NDArray[np.integer],
-        pre: Preintegrals,
-        sigmas: tuple[Array, Array, Array] | None = None,
-    ) -> tuple[Array, Array, Array]:
-        """Sigma points of walkers ``lanes`` at block sample ``t`` ((B,) or (B, T)),
-        moved from their redraw at ``anchor`` (B,) by the preintegrals; from the
-        current sigma points, or from ``sigmas`` (C, v, x of ``lanes``)."""
-        D_rel, AB_rel, tau = relative_increments(pre, lanes, anchor, t, self.dt)
-        if sigmas is None:
-            sigmas = (self.sig_C[lanes], self.sig_v[lanes], self.sig_p[lanes])
-        C0, v0, p0 = sigmas
-        if np.ndim(t) == 2:
-            C0, v0, p0 = C0[:, None], v0[:, None], p0[:, None]
-        moved = np.matmul(C0, np.concatenate((D_rel, AB_rel), axis=-1)[..., None, :, :])
-        C, rot = moved[..., :3], moved[..., 3:]  # C₀ D and C₀ [A B]: one matmul
-        v = v0 + rot[..., 0]
-        v[..., 2] -= self.config.g * tau[..., None]
-        p = p0 + v0 * tau[..., None, None] + rot[..., 1]
-        p[..., 2] -= 0.5 * self.config.g * (tau * tau)[..., None]
-        return C, v, p
-
-    def _central_track(
-        self, lanes: NDArray[np.integer], anchor: NDArray[np.integer], pre: Preintegrals
-    ) -> tuple[Array, Array]:
-        """Velocity and position ``(B, K, 3)`` of the central sigma point after each
-        sample of the block, moved from the redraw at ``anchor``: the attitude
-        products C_c D_aᵀ are formed once per walker, not per sample."""
-        k = pre.F.shape[1]
-        t = np.broadcast_to(np.arange(1, k + 1), (len(lanes), k))
-        Da, dA, dB, steps = block_differences(pre, lanes, anchor, t, self.dt)
-        M_T = np.swapaxes(np.matmul(self.sig_C[lanes, 0], np.swapaxes(Da, -1, -2)), -1, -2)
-        tau = steps * pre.tau_rate[lanes, None]
-        g = self.config.g
-        v0, p0 = self.sig_v[lanes, 0, None], self.sig_p[lanes, 0, None]
-        v = v0 + np.matmul(dA, M_T)
-        v[..., 2] -= g * tau
-        p = p0 + v0 * tau[..., None] + np.matmul(dB, M_T)
-        p[..., 2] -= 0.5 * g * tau * tau
-        return v, p
 
     def _freeze(self, idx: NDArray[np.integer]) -> None:
         """Declare walkers diverged: they stay at their last posterior (finite)."""
@@ -732,84 +624,6 @@ class ZuptUkf:
         x = np.nan_to_num(self.x[idx], nan=0.0, posinf=0.0, neginf=0.0)
         self.set_state(idx, x, repair_covariance(np.nan_to_num(self.P[idx]))[0])
         self.sig_v[idx] = 0.0
-
-    def _record(
-        self,
-        anchors: list[tuple[NDArray[np.int64], NDArray[np.int64], Array, Array, Array]],
-        pre: Preintegrals,
-        k: int,
-        record: str,
-        diverged_at: NDArray[np.int64],
-    ) -> tuple[Array, Array | None]:
-        """Mean position (and state) after every sample of the block: each time
-        from the walker's last redraw before it."""
-        n = self.n
-        positions = np.zeros((n, k, 3))
-        states = np.zeros((n, k, STATE_DIM)) if record == "state" else None
-        t_all = np.arange(1, k + 1)
-        # owner[i, t-1] = the anchor set (round) whose redraw sample t of walker i follows
-        owner = np.zeros((n, k), dtype=np.int64)
-        for r, (lanes, a, *_) in enumerate(anchors):
-            owner[lanes] = np.where(t_all[None, :] > a[:, None], r, owner[lanes])
-        for r, (lanes, a, C0, v0, p0) in enumerate(anchors):
-            i, t = np.nonzero(owner[lanes] == r)  # each sample is evaluated once
-            if i.size == 0:
-                continue
-            t = t + 1
-            C, v, p = self._sigmas_at(lanes[i], a[i], t, pre, sigmas=(C0[i], v0[i], p0[i]))
-            positions[lanes[i], t - 1] = np.einsum("s,bsd->bd", self.weights.Wm, p)
-            if states is not None:
-                states[lanes[i], t - 1] = state_mean(dcm_to_state(C, v, p), self.weights.Wm)
-        hold = t_all[None, :] >= diverged_at[:, None]  # held at the frozen posterior
-        if hold.any():
-            positions = np.where(hold[..., None], self.mean_position()[:, None, :], positions)
-            if states is not None:
-                states = np.where(hold[..., None], self.mean_state()[:, None, :], states)
-        return positions, states
-
-    def _update(
-        self,
-        idx: NDArray[np.integer],
-        sig_C: Array,
-        sig_v: Array,
-        sig_p: Array,
-        elapsed_s: Array,
-        kinds: NDArray[np.str_] | None,
-        sample: NDArray[np.integer],
-    ) -> tuple[NDArray[np.bool_], Array]:
-        """ZUPT of walkers ``idx`` from their propagated sigma points; redraws them."""
-        c = self.config
-        W = self.weights
-        sig = dcm_to_state(sig_C, sig_v, sig_p)
-        Q = process_noise(
-            c.assumed_imu, self.rate_hz, elapsed_s, self.process_noise_scale[idx], self.q_basis
-        )
-        x_prior, P_prior = prior_moments(sig, W, Q)
-        z = np.zeros((len(idx), 4))
-        z[:, 0] = self.height_ref[idx]
-        R = self.zupt_noise_base * self.zupt_noise_scale[idx, None, None]
-        # h is linear: the update on prior sigma points is the Kalman update (update_linear).
-        res = update_linear(x_prior, P_prior, MEASURED, z, R, state_add, self.gate_nis)
-        self.updates[idx] += res.accepted
-        self.rejected[idx] += ~res.accepted
-        self.last_nis[idx] = res.nis
-        self.set_state(idx, res.x, res.P)
-        if kinds is not None:
-            for j, w in enumerate(idx):
-                self.history.append(
-                    UpdateRecord(
-                        int(w),
-                        int(sample[j]),
-                        str(kinds[j]),
-                        x_prior[j].copy(),
-                        P_prior[j].copy(),
-                        res.x[j].copy(),
-                        res.P[j].copy(),
-                        float(res.nis[j]),
-                        bool(res.accepted[j]),
-                    )
-                )
-        return res.accepted, res.nis
 
     # ------------------------------------------------------------------ queries
     def mean_state(self) -> Array:
