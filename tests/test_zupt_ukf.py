@@ -208,3 +208,34 @@ def test_advance_rejects_bad_blocks():
     rec = np.repeat(ok, 30, axis=1)
     with pytest.raises(ValueError, match="block_samples"):
         eng.run(np.zeros_like(rec), rec, block_samples=0)
+
+
+def test_engine_stance_logic_equals_the_offline_detectors(paper_walk):
+    """The kernel's detector (causal window, minimum stance duration, SHOE
+    condition) flags the same samples as the offline numpy detectors of
+    :mod:`pednav_env.nav.detectors` on the same inputs."""
+    from pednav_env.nav.detectors import (
+        ThresholdDetectorConfig,
+        apply_min_duration,
+        causal_moving_mean,
+        shoe_statistic,
+    )
+
+    imu = noisy(paper_walk, 3, seed=11)
+    omega, f = imu.omega_b, imu.f_b
+    # SHOE with a 5-sample window and a 0.06 s minimum stance
+    shoe_cfg = ShoeDetectorConfig(window_s=0.05, min_stance_s=0.06)
+    run = ZuptUkf(ZuptUkfConfig(detector=shoe_cfg), RATE, 3).run(omega, f)
+    k0 = run.start_sample
+    cond = shoe_statistic(omega, f, shoe_cfg, RATE)[:, k0:] <= shoe_cfg.threshold
+    expected = apply_min_duration(cond, 6)
+    np.testing.assert_array_equal(run.stance[:, k0:], expected)
+    assert 0.2 < expected.mean() < 0.8  # both phases present
+    # eq (5) with only the rate condition active (Δf_max out of reach): 0.07 s causal
+    # mean of |ω'| against ω_max, 0.04 s minimum; the window restarts after alignment
+    thr_cfg = ThresholdDetectorConfig(window_s=0.07, min_stance_s=0.04, delta_f_max=1e9)
+    run = ZuptUkf(ZuptUkfConfig(detector=thr_cfg), RATE, 3).run(omega, f)
+    mean_rate = causal_moving_mean(np.linalg.norm(omega[:, k0:], axis=-1), 7)
+    expected = apply_min_duration(mean_rate <= thr_cfg.omega_max, 4)
+    np.testing.assert_array_equal(run.stance[:, k0:], expected)
+    assert 0.2 < expected.mean() < 0.8
