@@ -269,7 +269,8 @@ def process_noise(
 
 @dataclass
 class UpdateRecord:
-    """One ZUPT of one walker (kept when ``record_updates`` is on)."""
+    """One ZUPT of one walker (kept when ``record_updates`` is on; within a block the
+    records come walker by walker, each walker's in time order)."""
 
     walker: int
     sample: int
