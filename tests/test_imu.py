@@ -79,6 +79,31 @@ def test_walker_errors_do_not_depend_on_the_batch():
     np.testing.assert_array_equal(batch.f_b, again.f_b)
 
 
+@pytest.mark.parametrize("walk_density", [0.0, 0.03])
+def test_errors_are_the_generators_normal_draws_in_order(walk_density):
+    """K, b, ν, then the (T, 3) records b_rw,ω, b_rw,f, δω, δf, each row by row, all
+    from the walker's Generator as its own ``standard_normal`` draws them; the
+    random-walk draws are made even when their density is zero."""
+    t, rate = 300, 100.0
+    omega, f = np.zeros((1, t, 3)), np.zeros((1, t, 3))
+    spec = ImuSpec(
+        gyro_noise_density=0.01,
+        accel_noise_density=0.02,
+        gyro_step_drift_std=0.0,
+        gyro_bias_rw_density=walk_density,
+        accel_bias_rw_density=2 * walk_density,
+    )
+    m = simulate_imu(omega, f, rate, spec, [np.random.default_rng(7)])
+    ref = np.random.default_rng(7)
+    ref.standard_normal(9 + 9 + 3 + 3 + 3)  # K_ω, K_f, b_ω, b_f, ν (one gait step)
+    walk_w, walk_f, noise_w, noise_f = (ref.standard_normal((t, 3)) for _ in range(4))
+    root_dt = math.sqrt(1.0 / rate)
+    expect_w = np.cumsum(walk_w, axis=0) * walk_density * root_dt + noise_w * 0.01 * 10.0
+    expect_f = np.cumsum(walk_f, axis=0) * 2 * walk_density * root_dt + noise_f * 0.02 * 10.0
+    np.testing.assert_allclose(m.omega_b[0], expect_w, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(m.f_b[0], expect_f, rtol=1e-12, atol=1e-15)
+
+
 def test_grades_differ_in_the_expected_direction():
     omega, f = static_truth(n=8, t=2000)
     adis = simulate_imu(omega, f, 100.0, ImuSpec.adis16405(), gens(8))

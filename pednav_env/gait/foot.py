@@ -32,18 +32,16 @@ its knots (stance, mid-swing). The ``realistic`` routes add, beyond the paper:
 
 All outputs are batched over walkers: ``(N, T, ...)``.
 
-Speed (an episode reset simulates a walk): the evaluation times are grouped by
-the kind of piece they fall in (stance, straight or turning moving phase) and
-processed a few thousand at a time, in reused work arrays, component by
-component; where an angle or rate is exactly zero or constant in a kind of
-piece, the operations it would enter are skipped, which changes no value. The
-results are bit for bit those of the plain formulas.
+Speed (an episode reset simulates a walk): the walk is evaluated time after
+time by compiled kernels (:mod:`pednav_env.gait.foot_kernels`), with the
+exact zeros of each kind of piece (stance, straight or turning moving phase)
+skipped at compile time, which changes no value. The results are bit for bit
+those of the plain formulas.
 """
 
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -52,35 +50,22 @@ from numpy.typing import NDArray
 from scipy.interpolate import PPoly
 
 from pednav_env.constants import STANDARD_GRAVITY
-from pednav_env.gait.foot_route import Gait, Route
+from pednav_env.gait.foot_kernels import (
+    STANCE,
+    STRAIGHT,
+    TURNING,
+    cumulative_distance,
+    gait_labels,
+    simulate_walk,
+)
+from pednav_env.gait.foot_route import Route
+from pednav_env.gait.lever_arm import Vec, lever_arm_rows
 from pednav_env.gait.splines import clamped_cubic_coefficients
 
 Array = NDArray[np.float64]
 
-#: Evaluation times processed at once: the temporaries of one chunk stay in cache.
-_CHUNK_POINTS = 4096
-#: Evaluation times prepared at once (piece lookup, realism terms): bounds
-#: memory on long walks.
-_BLOCK_POINTS = 65536
 #: Heel-to-toe-pivot distance used for the toe-off knot (m).
 FOOT_LENGTH_M = 0.18
-#: Heel-strike transient time constant τ (s) and complex exponent λ.
-_HS_TAU = 0.012
-_HS_LAMBDA = complex(-1.0, 3.0)
-
-
-def _hs_unit_peak() -> float:
-    s = np.linspace(0, 12, 4001)
-    return float(
-        np.max(
-            np.abs(
-                np.imag((2 + 4 * _HS_LAMBDA * s + _HS_LAMBDA**2 * s**2) * np.exp(_HS_LAMBDA * s))
-            )
-        )
-    )
-
-
-_HS_PEAK = _hs_unit_peak()
 #: 2-point Gauss–Legendre nodes and weights on [−1, 1].
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(2)
 
@@ -148,14 +133,8 @@ class FootTrajectory:
     @property
     def distance_m(self) -> Array:
         """Cumulative horizontal distance walked by the IMU, (N, T+1)."""
-        x, y = self.pos_n[..., 0], self.pos_n[..., 1]
-        dx = x[:, 1:] - x[:, :-1]
-        dy = y[:, 1:] - y[:, :-1]
-        step = dx * dx
-        step += dy * dy
-        np.sqrt(step, out=step)  # the Euclidean norm, summed as np.linalg.norm does
-        out = np.zeros((self.num_walkers, step.shape[1] + 1))
-        np.cumsum(step, axis=1, out=out[:, 1:])
+        out = np.empty(self.pos_n.shape[:2])
+        cumulative_distance(self.pos_n, out)
         return out
 
 
@@ -164,7 +143,7 @@ class _Schedule:
     """One walk: heel position and Euler angles as a piecewise cubic, and its events.
 
     The cubic pieces use ``scipy.interpolate.PPoly``'s layout and arithmetic
-    (:func:`_evaluate_pieces`); :attr:`pp` builds the PPoly itself.
+    (:mod:`pednav_env.gait.foot_kernels`); :attr:`pp` builds the PPoly itself.
     """
 
     breaks: Array  # (P+1,) piece boundaries (s)
@@ -179,7 +158,7 @@ class _Schedule:
     span_start: Array  # (S,) moving phases Γ₁ + Γ₂ + Γ₃
     span_end: Array  # (S,)
     span_gait: NDArray[np.int64]  # (S,) Gait label
-    piece_kind: NDArray[np.int8]  # (P,) _STANCE, _STRAIGHT or _TURNING
+    piece_kind: NDArray[np.int8]  # (P,) STANCE, STRAIGHT or TURNING
 
     @property
     def pp(self) -> PPoly:
@@ -320,7 +299,7 @@ def _build_schedule(route: Route) -> _Schedule:
     coefs = np.ascontiguousarray(coefs.transpose(0, 2, 1))
     moving = np.any(coefs[:3] != 0, axis=0)  # (6, P): the row varies in the piece
     level = (coefs[3, 4] == 0) & (coefs[3, 5] == 0)
-    kind = np.where(~moving.any(axis=0) & level, _STANCE, np.where(moving[3], _TURNING, _STRAIGHT))
+    kind = np.where(~moving.any(axis=0) & level, STANCE, np.where(moving[3], TURNING, STRAIGHT))
     return _Schedule(
         breaks,
         coefs,
@@ -336,342 +315,9 @@ def _build_schedule(route: Route) -> _Schedule:
     )
 
 
-def _interval_index(edges: Array, t: Array) -> NDArray[np.intp]:
-    """``searchsorted(edges, t, side="right") − 1`` for sorted ``t``.
-
-    One ``searchsorted`` of the few edges into the many times gives how many
-    times fall in each interval; the interval numbers are repeated.
-    """
-    first = np.searchsorted(t, edges, side="left")
-    counts = np.empty(edges.size + 1, dtype=np.intp)
-    counts[0] = first[0]
-    counts[1:-1] = np.diff(first)
-    counts[-1] = t.size - first[-1]
-    return np.repeat(np.arange(-1, edges.size), counts)
-
-
-def _points_inside(
-    t: Array, start: Array, end: Array, closed_start: bool
-) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
-    """Indices i and windows j of the sorted times with start_j < t_i < end_j
-    (start_j ≤ t_i if ``closed_start``); the windows are ordered and disjoint."""
-    first = np.searchsorted(t, start, side="left" if closed_start else "right")
-    count = np.searchsorted(t, end, side="left") - first
-    np.maximum(count, 0, out=count)
-    window = np.repeat(np.arange(start.size), count)
-    shift = first - (np.cumsum(count) - count)
-    return np.arange(window.size) + np.repeat(shift, count), window
-
-
-def _sin2_window(t: Array, start: Array, end: Array, n_values: int) -> list[Array]:
-    """w = sin²(πs), s = (t − start)/(end − start), and its first two time derivatives.
-
-    ``t`` must lie strictly inside (start, end); the first ``n_values`` of
-    [w, ẇ, ẅ] are returned.
-    """
-    d = end - start
-    s = (t - start) / d
-    out = [np.sin(np.pi * s) ** 2]
-    if n_values > 1:
-        out.append(np.pi / d * np.sin(2 * np.pi * s))
-    if n_values > 2:
-        out.append(2 * np.pi**2 / d**2 * np.cos(2 * np.pi * s))
-    return out
-
-
-@dataclass(frozen=True)
-class _RealismPoints:
-    """Which evaluation times carry realism terms (module docstring).
-
-    ``window_points`` (increasing indices into the times) lie in the roll-over
-    windows ``window_of`` (into :meth:`windows`), ``strike_points`` within
-    12τ after the heel strikes ``strike_of``; every time belongs to the latest
-    window (strike) that starts at or before it.
-    """
-
-    window_points: NDArray[np.intp]
-    window_of: NDArray[np.intp]
-    strike_points: NDArray[np.intp]
-    strike_of: NDArray[np.intp]
-
-    @staticmethod
-    def windows(sched: _Schedule) -> tuple[Array, Array, Array]:
-        """Roll-over windows, the last T₀ of every moving stance: start, end, speed."""
-        moving = sched.stance_speed > 0
-        start = np.maximum(sched.stance_start, sched.stance_end - sched.stance_nominal_s)
-        return start[moving], sched.stance_end[moving], sched.stance_speed[moving]
-
-    @classmethod
-    def find(cls, sched: _Schedule, t: Array) -> _RealismPoints:
-        """The points among the sorted times ``t``."""
-        ws, we, _ = cls.windows(sched)
-        sel, k = _points_inside(t, ws, np.minimum(we, np.append(ws[1:], np.inf)), False)
-        ths = sched.strike_t
-        # Candidates: from a strike to the next one, at most 12τ (+ margin) after it.
-        reach = np.minimum(ths + (12 * _HS_TAU + 1e-6), np.append(ths[1:], np.inf))
-        hit, j = _points_inside(t, ths, reach, True)
-        keep = t[hit] - ths[j] < 12 * _HS_TAU
-        return cls(sel, k, hit[keep], j[keep])
-
-    def moved(self, new_place: NDArray[np.intp], key: NDArray[np.int8]) -> _RealismPoints:
-        """The points after the times were reordered by a stable sort on ``key``,
-        time i going to ``new_place[i]``."""
-        ow = np.argsort(key[self.window_points], kind="stable")
-        oh = np.argsort(key[self.strike_points], kind="stable")
-        return _RealismPoints(
-            new_place[self.window_points[ow]],
-            self.window_of[ow],
-            new_place[self.strike_points[oh]],
-            self.strike_of[oh],
-        )
-
-
-def _add_rollover(
-    y: Array, lo: int, t: Array, start: Array, end: Array, speed: Array, phases: Array
-) -> None:
-    """Add the stance roll-over and the heel micro-motion at times ``t`` in place.
-
-    ``y`` (n_values, 6, M): rows x, y, z, ψ, θ, γ and their derivatives; the
-    times are its columns lo, lo+1, …; ``start``, ``end`` and ``speed`` those
-    of each time's window; ``phases`` (3, 1) the micro-motion phases.
-    """
-    n_values = y.shape[0]
-    cols = slice(lo, lo + t.size)
-    w = _sin2_window(t, start, end, n_values)
-    amp = 0.011 * speed**2  # roll-over pitch bump (rad)
-    for d in range(n_values):
-        y[d, 4, cols] += amp * w[d]
-    a_mm = 2e-4 * speed**2  # heel micro-motion (m)
-    fq = 2 * np.pi * np.array([9.0, 11.0, 13.0])[:, None]
-    arg = t * fq + phases  # (3, n)
-    sn = np.sin(arg)
-    term = a_mm * w[0] * sn
-    y[0, :3, cols] += term
-    if n_values > 1:
-        cs = np.cos(arg)
-        # a_mm (ẇ sin + w ω cos), term by term in place
-        np.multiply(w[1], sn, out=term)
-        part = w[0] * fq
-        part *= cs
-        term += part
-        term *= a_mm
-        y[1, :3, cols] += term
-    if n_values > 2:
-        # a_mm (ẅ sin + 2 ẇ ω cos − w ω² sin)
-        np.multiply(w[2], sn, out=term)
-        np.multiply(2 * w[1], fq, out=part)
-        part *= cs
-        term += part
-        np.multiply(w[0], fq**2, out=part)
-        part *= sn
-        term -= part
-        term *= a_mm
-        y[2, :3, cols] += term
-
-
-def _add_heel_strike(
-    y: Array, lo: int, t: Array, t_hs: Array, speed: Array, forward: Array
-) -> None:
-    """Add the heel-strike transients at times ``t`` in place (columns lo, lo+1, … of
-    ``y``); ``t_hs``, ``speed`` and ``forward`` (n, 2) those of each time's strike."""
-    n_values = y.shape[0]
-    cols = slice(lo, lo + t.size)
-    lam = _HS_LAMBDA
-    s = (t - t_hs) / _HS_TAU
-    e = np.exp(lam * s)
-    B = 10.0 * speed**2 * _HS_TAU**2 / _HS_PEAK
-    p = [B * np.imag(s**2 * e)]
-    if n_values > 1:
-        p.append(B / _HS_TAU * np.imag((2 * s + lam * s**2) * e))
-    if n_values > 2:
-        p.append(B / _HS_TAU**2 * np.imag((2 + 4 * lam * s + lam**2 * s**2) * e))
-    fx = 0.5 * forward[:, 0]
-    fy = 0.5 * forward[:, 1]
-    for d in range(n_values):
-        y[d, 0, cols] += p[d] * fx
-        y[d, 1, cols] += p[d] * fy
-        y[d, 2, cols] += p[d]
-
-
-# ---------------------------------------------------------------- kinematics
-# Paper 003's lever-arm formulas (module docstring) component by component on
-# (M,) arrays, each in the same order as pednav_env.rotations and numpy's
-# cross/einsum evaluated them. An operand may be None, an exact zero, or _ONE,
-# an exact one: the helpers skip such products (x·1 = x, x + 0 = x and
-# 0 − x = −x exactly), so a walk phase where some angles or rates vanish
-# identically runs fewer operations and gets the same values (at most a
-# zero's sign differs).
-
-
-class _One:
-    """An exact 1 (a cosine of an angle that is exactly zero)."""
-
-
-_ONE = _One()
-_Term = Array | float | _One | None
-_Vec = tuple[_Term, _Term, _Term]
-
-
-def _mul(a: _Term, b: _Term) -> _Term:
-    if a is None or b is None:
-        return None
-    if b is _ONE:
-        return a
-    if a is _ONE:
-        return b
-    return a * b
-
-
-def _add(a: _Term, b: _Term) -> _Term:
-    if a is None:
-        return b
-    if b is None:
-        return a
-    return a + b
-
-
-def _sub(a: _Term, b: _Term) -> _Term:
-    if b is None:
-        return a
-    if a is None:
-        return -b
-    return a - b
-
-
-def _neg(a: _Term) -> _Term:
-    return None if a is None else -a
-
-
-def _dcm(sin_e: _Vec, cos_e: _Vec) -> tuple[_Term, ...]:
-    """C_nb = B_zxᵀ = R_z(ψ) R_y(θ) R_x(γ) (paper 003 eq 1), row-major 9-tuple."""
-    sy, sp, sr = sin_e
-    cy, cp, cr = cos_e
-    cysp = _mul(cy, sp)
-    sysp = _mul(sy, sp)
-    return (
-        _mul(cy, cp),
-        _sub(_mul(cysp, sr), _mul(sy, cr)),
-        _add(_mul(cysp, cr), _mul(sy, sr)),
-        _mul(sy, cp),
-        _add(_mul(sysp, sr), _mul(cy, cr)),
-        _sub(_mul(sysp, cr), _mul(cy, sr)),
-        _neg(sp),
-        _mul(cp, sr),
-        _mul(cp, cr),
-    )
-
-
-def _rotate(C: tuple[_Term, ...], v: _Vec) -> _Vec:
-    """C v (body → navigation); sums (term 0 + term 2) + term 1 like numpy's einsum."""
-    return tuple(
-        _add(_add(_mul(C[3 * i], v[0]), _mul(C[3 * i + 2], v[2])), _mul(C[3 * i + 1], v[1]))
-        for i in range(3)
-    )
-
-
-def _rotate_transposed(C: tuple[_Term, ...], v: _Vec) -> _Vec:
-    """Cᵀ v (navigation → body)."""
-    return tuple(
-        _add(_add(_mul(C[i], v[0]), _mul(C[3 + i], v[1])), _mul(C[6 + i], v[2])) for i in range(3)
-    )
-
-
-def _cross(a: _Vec, b: _Vec) -> _Vec:
-    """a × b."""
-    return (
-        _sub(_mul(a[1], b[2]), _mul(a[2], b[1])),
-        _sub(_mul(a[2], b[0]), _mul(a[0], b[2])),
-        _sub(_mul(a[0], b[1]), _mul(a[1], b[0])),
-    )
-
-
-def _body_rates(de: _Vec, sin_e: _Vec, cos_e: _Vec) -> _Vec:
-    """ω from the Euler rates ``de`` (paper 003): ω₁ = γ̇ − ψ̇ sin θ,
-    ω₂ = θ̇ cos γ + ψ̇ cos θ sin γ, ω₃ = −θ̇ sin γ + ψ̇ cos θ cos γ."""
-    dy, dp, dr = de
-    sp, sr = sin_e[1], sin_e[2]
-    cp, cr = cos_e[1], cos_e[2]
-    dycp = _mul(dy, cp)
-    return (
-        _sub(dr, _mul(dy, sp)),
-        _add(_mul(dp, cr), _mul(dycp, sr)),
-        _add(_neg(_mul(dp, sr)), _mul(dycp, cr)),
-    )
-
-
-def _body_angular_acceleration(de: _Vec, dde: _Vec, sin_e: _Vec, cos_e: _Vec) -> _Vec:
-    """ω̇, the time derivative of :func:`_body_rates` (``dde`` the Euler accelerations)."""
-    dy, dp, dr = de
-    ay, ap, ar = dde
-    sp, sr = sin_e[1], sin_e[2]
-    cp, cr = cos_e[1], cos_e[2]
-    dydp = _mul(dy, dp)
-    dpdr = _mul(dp, dr)
-    aycp = _mul(ay, cp)
-    dydpsp = _mul(dydp, sp)
-    dydrcp = _mul(_mul(dy, dr), cp)
-    w1 = _sub(_sub(ar, _mul(ay, sp)), _mul(dydp, cp))
-    w2 = _sub(_mul(ap, cr), _mul(dpdr, sr))
-    w2 = _add(_sub(_add(w2, _mul(aycp, sr)), _mul(dydpsp, sr)), _mul(dydrcp, cr))
-    w3 = _sub(_neg(_mul(ap, sr)), _mul(dpdr, cr))
-    w3 = _sub(_sub(_add(w3, _mul(aycp, cr)), _mul(dydpsp, cr)), _mul(dydrcp, sr))
-    return w1, w2, w3
-
-
-def _lever(lever_arm_m: Array | Sequence[float]) -> _Vec:
+def _lever(lever_arm_m: Array | Sequence[float]) -> Vec:
     """r_OM as floats, an exact zero component as None."""
     return tuple(float(c) if c != 0 else None for c in np.asarray(lever_arm_m, dtype=float))
-
-
-def _imu_states(
-    heel: Sequence[Array], de: _Vec | None, sin_e: _Vec, cos_e: _Vec, r: _Vec, out: Array
-) -> None:
-    """IMU position x = B_zxᵀ r_OM + r_CO into ``out[0:3]`` and, given the Euler
-    rates ``de``, the velocity v_x = B_zxᵀ (ω × r_OM) + ṙ_CO into ``out[3:6]``.
-
-    ``heel`` = [r_CO rows] or [r_CO rows, ṙ_CO rows], each (3, M).
-    """
-    C = _dcm(sin_e, cos_e)
-    for i, c in enumerate(_rotate(C, r)):
-        _store(_add(heel[0][i], c), out[i])
-    if de is not None:
-        omega = _body_rates(de, sin_e, cos_e)
-        for i, c in enumerate(_rotate(C, _cross(omega, r))):
-            _store(_add(heel[1][i], c), out[3 + i])
-
-
-def _imu_readings(
-    heel: Sequence[Array],
-    de: _Vec,
-    dde: _Vec,
-    sin_e: _Vec,
-    cos_e: _Vec,
-    r: _Vec,
-    g: float,
-    out: Array,
-) -> None:
-    """Body rate ω into ``out[0:3]`` and specific force f_z = B_zx (a_x − g_x) into
-    ``out[3:6]``, a_x = B_zxᵀ (ω × ω × r_OM + ω̇ × r_OM) + r̈_CO (paper 003).
-
-    ``heel`` = [r_CO, ṙ_CO, r̈_CO] rows, each (3, M); ``de``, ``dde`` the Euler
-    rates and accelerations.
-    """
-    C = _dcm(sin_e, cos_e)
-    omega = _body_rates(de, sin_e, cos_e)
-    omega_dot = _body_angular_acceleration(de, dde, sin_e, cos_e)
-    rel = tuple(
-        _add(a, b)
-        for a, b in zip(_cross(omega, _cross(omega, r)), _cross(omega_dot, r), strict=True)
-    )
-    acc = [_add(h, c) for h, c in zip(heel[2], _rotate(C, rel), strict=True)]
-    acc[2] = _add(acc[2], g)  # a − g_vec, g_vec = (0, 0, −g)
-    for i, v in enumerate((*omega, *_rotate_transposed(C, (acc[0], acc[1], acc[2])))):
-        _store(v, out[i])
-
-
-def _store(value: _Term, out: Array) -> None:
-    """out ← value (an exact zero for None)."""
-    out[:] = 0.0 if value is None else value
 
 
 def imu_kinematics(
@@ -684,237 +330,37 @@ def imu_kinematics(
     """
     shape = np.broadcast_shapes(*(np.shape(a) for a in (*heel, *euler)))
 
-    def rows(a: Array) -> _Vec:
-        return tuple(np.broadcast_to(np.asarray(a, dtype=float), shape).reshape(-1, 3).T)
+    def rows(arrays: list[Array]) -> Array:
+        return np.stack(
+            [np.broadcast_to(np.asarray(a, dtype=float), shape).reshape(-1, 3).T for a in arrays]
+        )
 
-    h, e = [rows(a) for a in heel], [rows(a) for a in euler]
-    sin_e, cos_e = tuple(np.sin(e[0])), tuple(np.cos(e[0]))
-    C = _dcm(sin_e, cos_e)
+    h, e = rows(heel), rows(euler)
     r = tuple(float(c) for c in np.asarray(lever_arm_m, dtype=float))
-    omega = _body_rates(e[1], sin_e, cos_e)
-    omega_dot = _body_angular_acceleration(e[1], e[2], sin_e, cos_e)
-    w_x_r = _cross(omega, r)
-    rel = tuple(_add(a, b) for a, b in zip(_cross(omega, w_x_r), _cross(omega_dot, r), strict=True))
-    pos = [_add(a, c) for a, c in zip(h[0], _rotate(C, r), strict=True)]
-    vel = [_add(a, c) for a, c in zip(h[1], _rotate(C, w_x_r), strict=True)]
-    acc = [_add(a, c) for a, c in zip(h[2], _rotate(C, rel), strict=True)]
-    f_b = _rotate_transposed(C, (acc[0], acc[1], _add(acc[2], g)))
-
-    def out(v: Sequence[_Term]) -> Array:
-        stacked = np.zeros((3, h[0][0].size))
-        for i, a in enumerate(v):
-            _store(a, stacked[i])
-        return stacked.T.reshape(shape)
-
-    return out(pos), out(vel), out(acc), out(omega), out(f_b)
+    out = np.empty((5, 3, h.shape[2]))
+    lever_arm_rows(h, e, r, float(g), out)
+    pos, vel, acc, omega, f_b = (v.T.reshape(shape) for v in out)
+    return pos, vel, acc, omega, f_b
 
 
-# --------------------------------------------------------------- evaluation
-#: Kinds of spline piece, each with its own exact shortcuts: stances (heel
-#: pose constant and level: only realism moves the foot, about the pitch axis
-#: and the heel), straight moving phases (heading constant) and turns.
-_STANCE, _STRAIGHT, _TURNING = 0, 1, 2
-
-
-class _Scratch(threading.local):
-    """Work arrays reused from chunk to chunk and from call to call, one set per
-    thread (a few MB): fresh large arrays cost a page fault per 4 kB on first
-    touch, which dominated short walks."""
-
-    def __init__(self) -> None:
-        self.buffers: dict[str, Array] = {}
-
-    def view(self, name: str, shape: tuple[int, ...]) -> Array:
-        """A C-contiguous ``shape`` float view on buffer ``name`` (grown as needed)."""
-        size = math.prod(shape)
-        buf = self.buffers.get(name)
-        if buf is None or buf.size < size:
-            buf = self.buffers[name] = np.empty(size)
-        return buf[:size].reshape(shape)
-
-
-_SCRATCH = _Scratch()
-
-
-def _evaluate_pieces(
-    sched: _Schedule, t: Array, piece: NDArray[np.intp], n_values: int, scratch: _Scratch
-) -> Array:
-    """Heel position, Euler angles and their derivatives at times ``t`` in pieces ``piece``.
-
-    Returns ``(n_values, 6, M)``, a view on ``scratch``: [value, first,
-    second derivative][:n_values] of the rows x, y, z, ψ, θ, γ. Past the end
-    of the walk the foot stands still. With s = t − tₖ in piece k this is the
-    power sum c₃ + c₂s + c₁s² + c₀s³ and its derivatives c₂ + 2c₁s + 3c₀s²,
-    2c₁ + 6c₀s, term by term in the order ``PPoly.__call__`` adds them, so the
-    results are those of ``sched.pp(t, nu)`` bit for bit.
-    """
-    m = t.size
-    b = sched.breaks
-    t_end = b[-1]
-    y = scratch.view("values", (n_values, 6, m))
-    c = scratch.view("coefs", (24, m))
-    np.take(sched.coefs.reshape(24, -1), piece, axis=1, out=c, mode="clip")
-    c0, c1, c2, c3 = c.reshape(4, 6, m)
-    s = np.minimum(t, t_end)
-    s -= np.take(b, piece)
-    if n_values == 1:  # s, s², s³ broadcast over the six rows
-        s1, s2 = s, s * s
-        s3 = s2 * s
-    else:  # spread over the six rows: same-shape products are faster
-        s1, s2, s3 = scratch.view("powers", (3, 6, m))
-        s1[:] = s
-        np.multiply(s1, s1, out=s2)
-        np.multiply(s2, s1, out=s3)
-    tmp = scratch.view("tmp", (6, m))
-    if n_values > 1:
-        np.multiply(c1, s1, out=y[1])
-        y[1] *= 2.0
-        y[1] += c2
-        np.multiply(c0, s2, out=tmp)
-        tmp *= 3.0
-        y[1] += tmp
-    if n_values > 2:
-        np.multiply(c0, s1, out=y[2])
-        y[2] *= 6.0
-        np.multiply(c1, 2.0, out=tmp)
-        y[2] += tmp
-    np.multiply(c2, s1, out=y[0])
-    y[0] += c3
-    np.multiply(c1, s2, out=tmp)
-    y[0] += tmp
-    np.multiply(c0, s3, out=tmp)
-    y[0] += tmp
-    if n_values > 1 and t[-1] > t_end:
-        y[1:, :, t > t_end] = 0.0
-    return y
-
-
-def _evaluate_stance(
-    sched: _Schedule, piece: NDArray[np.intp], n_values: int, scratch: _Scratch
-) -> Array:
-    """:func:`_evaluate_pieces` for times in stance pieces: c₃, then zero derivatives."""
-    y = scratch.view("values", (n_values, 6, piece.size))
-    np.take(sched.coefs[3], piece, axis=1, out=y[0], mode="clip")
-    y[1:] = 0.0
-    return y
-
-
-def _kinematics(
-    y: Array,
-    piece: NDArray[np.intp],
-    kind: int,
-    heading: tuple[Array, Array],
-    r: _Vec,
-    g: float,
-    out: Array,
-) -> None:
-    """States (``y`` with 1 or 2 values) or readings (3 values) of times in pieces
-    of one ``kind``, into ``out``.
-
-    Exact zeros: ψ̇, ψ̈ but in turns (ψ is then the piece's constant term, whose
-    sine and cosine ``heading`` tabulates); γ, γ̇, γ̈ in stances.
-    """
-    turning, stance = kind == _TURNING, kind == _STANCE
-    sin_e: _Vec = (
-        np.sin(y[0, 3]) if turning else np.take(heading[0], piece),
-        np.sin(y[0, 4]),
-        None if stance else np.sin(y[0, 5]),
-    )
-    cos_e: _Vec = (
-        np.cos(y[0, 3]) if turning else np.take(heading[1], piece),
-        np.cos(y[0, 4]),
-        _ONE if stance else np.cos(y[0, 5]),
-    )
-    n_values = y.shape[0]
-    rates = [
-        (y[d, 3] if turning else None, y[d, 4], None if stance else y[d, 5])
-        for d in range(1, n_values)
-    ]
-    if n_values == 3:
-        _imu_readings(y[:, :3], rates[0], rates[1], sin_e, cos_e, r, g, out)
+def _kernel_walk(sched: _Schedule, route: Route) -> tuple[Array, ...]:
+    """The walk as the tuple of arrays the kernels of :mod:`pednav_env.gait.foot_kernels`
+    take: breaks, coefficients, piece kinds, sin ψ and cos ψ of every piece's constant
+    term; roll-over windows (start, end, speed) and micro-motion phases; heel strikes
+    (time, speed, heading after). Routes without realism get no windows and strikes."""
+    psi = sched.coefs[3, 3]
+    if route.realistic:
+        moving = sched.stance_speed > 0  # roll-over: the last T₀ of every moving stance
+        start = np.maximum(sched.stance_start, sched.stance_end - sched.stance_nominal_s)
+        windows = (start[moving], sched.stance_end[moving], sched.stance_speed[moving])
+        phases = np.broadcast_to(np.asarray(route.seed_phases or 0.0, dtype=float), (3,)).copy()
+        strikes = (sched.strike_t, sched.strike_speed, sched.strike_forward)
     else:
-        _imu_states(y[:, :3], rates[0] if rates else None, sin_e, cos_e, r, out)
-        if n_values > 1:
-            out[6:] = y[0, 3:]
-
-
-def _evaluate_block(
-    sched: _Schedule,
-    route: Route,
-    t: Array,
-    n_values: int,
-    r: _Vec,
-    g: float,
-    heading: tuple[Array, Array],
-    scratch: _Scratch,
-) -> Array:
-    """IMU states or ideal readings at the sorted times ``t``.
-
-    ``n_values`` 1: position; 2: position, velocity and Euler angles; 3: body
-    rate and specific force. Returns their rows, ``(3, 9 or 6, M)`` in the
-    order of ``t``, a view on ``scratch``.
-
-    The times are regrouped by the kind of piece they fall in, and within a
-    kind those in a roll-over window come first, then those in a window and a
-    heel-strike transient, then those in a transient only, so that every
-    realism term adds to a slice; each kind is evaluated
-    :data:`_CHUNK_POINTS` at a time with its exact shortcuts. ``heading``
-    holds sin ψ and cos ψ of every piece's constant term.
-    """
-    m = t.size
-    b = sched.breaks
-    piece = _interval_index(b, np.minimum(t, b[-1]))  # ≥ 0: t ≥ 0 = b[0]
-    np.minimum(piece, b.size - 2, out=piece)
-    key = np.take(sched.piece_kind * 4, piece)
-    where = _RealismPoints.find(sched, t) if route.realistic else None
-    if where is None:
-        key += 3
-    else:
-        group = np.full(m, 3, dtype=np.int8)  # 0 window only, 1 both, 2 transient only, 3 none
-        group[where.window_points] = 0
-        hit = where.strike_points
-        group[hit] = np.where(group[hit] == 0, 1, 2)
-        key += group
-    order = np.argsort(key, kind="stable")
-    counts = np.bincount(key, minlength=12).reshape(3, 4)
-    start = np.cumsum(counts.sum(axis=1)) - counts.sum(axis=1)
-    t, piece = t[order], piece[order]
-    inverse = np.empty_like(order)
-    inverse[order] = np.arange(m)
-    if where is not None:
-        # In the new order every kind's window (transient) times form a slice.
-        where = where.moved(inverse, key)
-        ws, we, w_speed = _RealismPoints.windows(sched)
-        phases = np.asarray(route.seed_phases or (0.0, 0.0, 0.0))[:, None]
-    out = scratch.view("permuted", ({1: 3, 2: 9, 3: 6}[n_values], m))
-    n_window = n_strike = 0  # terms of the kinds before
-    for k in (_STANCE, _STRAIGHT, _TURNING):
-        lo, hi = int(start[k]), int(start[k] + counts[k].sum())
-        c0, c1, c2 = counts[k, :3].tolist()
-        windows = (lo, lo + c0 + c1)
-        strikes = (lo + c0, lo + c0 + c1 + c2)
-        for a in range(lo, hi, _CHUNK_POINTS):
-            z = min(a + _CHUNK_POINTS, hi)
-            p = piece[a:z]
-            if k == _STANCE:
-                y = _evaluate_stance(sched, p, n_values, scratch)
-            else:
-                y = _evaluate_pieces(sched, t[a:z], p, n_values, scratch)
-            if where is not None:
-                u, v = max(a, windows[0]), min(z, windows[1])
-                if v > u:
-                    j = where.window_of[u - windows[0] + n_window : v - windows[0] + n_window]
-                    _add_rollover(y, u - a, t[u:v], ws[j], we[j], w_speed[j], phases)
-                u, v = max(a, strikes[0]), min(z, strikes[1])
-                if v > u:
-                    j = where.strike_of[u - strikes[0] + n_strike : v - strikes[0] + n_strike]
-                    hs = sched.strike_t[j], sched.strike_speed[j], sched.strike_forward[j]
-                    _add_heel_strike(y, u - a, t[u:v], *hs)
-            _kinematics(y, p, k, heading, r, g, out[:, a:z])
-        n_window += c0 + c1
-        n_strike += c1 + c2
-    # (mode="clip": the indices are valid; it spares take's buffering of ``out``)
-    return np.take(out, inverse, axis=1, out=scratch.view("outputs", out.shape), mode="clip")
+        windows = (np.zeros(0), np.zeros(0), np.zeros(0))
+        phases = np.zeros(3)
+        strikes = (np.zeros(0), np.zeros(0), np.zeros((0, 2)))
+    arrays = (sched.breaks, sched.coefs, sched.piece_kind, np.sin(psi), np.cos(psi))
+    return tuple(np.ascontiguousarray(a) for a in (*arrays, *windows, phases, *strikes))
 
 
 def _simulate_walk(
@@ -930,40 +376,26 @@ def _simulate_walk(
 ) -> None:
     """States on ``t_grid`` and ideal readings of one walker, written in place.
 
-    ``vel`` and ``eul`` None: position only. Evaluation times: the grid
-    (states), then the two Gauss–Legendre nodes of every sample (readings),
-    :data:`_BLOCK_POINTS` at a time.
+    ``vel`` and ``eul`` None: position only. Sensor sample m is the mean over
+    [t_m, t_m+1] by 2-point Gauss–Legendre quadrature (exact for cubics;
+    O(Δt⁴) for the trigonometric kinematics).
     """
-    n = t_grid.size - 1
-    # Sensor sample m = mean over [t_m, t_m+1] by 2-point Gauss–Legendre
-    # quadrature (exact for cubics; O(Δt⁴) for the trigonometric kinematics).
-    offsets = 0.5 * cfg.dt * (1.0 + _GL_NODES)
-    half_w = 0.5 * _GL_WEIGHTS
-    r = _lever(cfg.lever_arm_m)
-    heading = (np.sin(sched.coefs[3, 3]), np.cos(sched.coefs[3, 3]))
-    scratch = _SCRATCH
-    n_values = 1 if vel is None else 2
-    for a in range(0, n + 1, _BLOCK_POINTS):
-        b = min(a + _BLOCK_POINTS, n + 1)
-        out = _evaluate_block(sched, route, t_grid[a:b], n_values, r, cfg.g, heading, scratch)
-        for c in range(3):
-            pos[a:b, c] = out[c]
-            if vel is not None and eul is not None:
-                vel[a:b, c] = out[3 + c]
-                eul[a:b, c] = out[6 + c]
-    # Readings: both nodes of every sample, in time order (t_m + o₀ < t_m + o₁).
-    step = _BLOCK_POINTS // 2
-    for a in range(0, n, step):
-        b = min(a + step, n)
-        t = (t_grid[a:b, None] + offsets).ravel()
-        out = _evaluate_block(sched, route, t, 3, r, cfg.g, heading, scratch)
-        for row in range(6):  # ω then f
-            mean = out[row, 0::2] * half_w[0]  # w₀h₀ + w₁h₁, the quadrature sum
-            mean += out[row, 1::2] * half_w[1]
-            # + 0: where the exact-zero shortcuts skipped a +0 term, a reading that
-            # is exactly zero comes out as −0; the full formulas give +0.
-            mean += 0.0
-            (omega if row < 3 else f_b)[a:b, row % 3] = mean
+    full = vel is not None and eul is not None
+    unused = np.empty((0, 3))
+    simulate_walk(
+        t_grid,
+        0.5 * cfg.dt * (1.0 + _GL_NODES),
+        0.5 * _GL_WEIGHTS,
+        _kernel_walk(sched, route),
+        _lever(cfg.lever_arm_m),
+        cfg.g,
+        full,
+        pos,
+        vel if full else unused,
+        eul if full else unused,
+        omega,
+        f_b,
+    )
 
 
 def simulate_foot(
@@ -1008,26 +440,20 @@ def simulate_foot(
             omega[i],
             f_b[i],
         )
-        t_end = sched.breaks[-1]
-        lo, hi = t_grid[:-1], t_grid[1:]
-        starts, ends = sched.stance_start, sched.stance_end
-        idx = np.searchsorted(starts, lo + 1e-12, side="right") - 1
-        valid = idx >= 0
-        inside = (
-            valid
-            & (lo >= starts[np.maximum(idx, 0)] - 1e-12)
-            & (hi <= ends[np.maximum(idx, 0)] + 1e-12)
+        events = (sched.stance_start, sched.stance_end, sched.span_start, sched.span_end)
+        stance_start, stance_end, span_start, span_end = map(np.ascontiguousarray, events)
+        gait_labels(
+            t_grid,
+            stance_start,
+            stance_end,
+            sched.breaks[-1],
+            span_start,
+            span_end,
+            sched.span_gait,
+            stance[i],
+            gait_step[i],
+            gait[i],
         )
-        inside |= lo >= t_end - 1e-12
-        stance[i] = inside
-        gait_step[i] = np.maximum(idx, 0)
-        if sched.span_start.size:
-            s0, s1, labels = sched.span_start, sched.span_end, sched.span_gait
-            j = np.searchsorted(s0, lo + 1e-12, side="right") - 1
-            jj = np.maximum(j, 0)
-            in_span = (j >= 0) & (lo < s1[jj] - 1e-12)
-            gait[i] = np.where(in_span, labels[jj], int(Gait.STANDING))
-        gait[i, inside] = int(Gait.STANDING)
     pos -= pos[:, :1].copy()
     return FootTrajectory(
         rate_hz=cfg.rate_hz,

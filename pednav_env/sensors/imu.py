@@ -23,6 +23,7 @@ from dataclasses import dataclass, fields
 from enum import StrEnum
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from pednav_env.constants import STANDARD_GRAVITY
@@ -255,17 +256,62 @@ def _error_matrix(rng: np.random.Generator, scale_std: float, misalignment_std: 
     return (np.eye(3) + np.diag(scale)) @ M
 
 
-def _add_bias_random_walk(rng: np.random.Generator, step_std: float, draw: Array, x: Array) -> None:
-    """x += b_rw, the bias random walk b_rw(t_k) = Σ_{j≤k} σ ξ_j (ξ_j standard normal).
+@njit(cache=True)
+def _add_bias_and_random_walk(
+    rng: np.random.Generator, x: Array, bias: Array, step_std: float
+) -> None:
+    """x ← (x + b) + b_rw for every row of ``x`` (T, 3): the turn-on bias ``bias`` and
+    the bias random walk b_rw(t_k) = Σ_{j≤k} σ ξ_j (ξ_j standard normal, summed in
+    order as ``np.cumsum``).
 
-    The draws (into ``draw``) are always made: the stream of later errors must
-    not depend on the densities. With ``step_std == 0`` the walk is exactly zero.
+    The T × 3 draws are always made, row by row (as ``standard_normal((T, 3))``):
+    the stream of later errors must not depend on the densities. With
+    ``step_std == 0`` the walk is exactly zero and is not added.
     """
-    rng.standard_normal(draw.shape, out=draw)
-    if step_std != 0:
-        np.cumsum(draw, axis=0, out=draw)
-        draw *= step_std
-        x += draw
+    s0 = s1 = s2 = 0.0
+    for k in range(x.shape[0]):
+        xi0, xi1, xi2 = rng.standard_normal(), rng.standard_normal(), rng.standard_normal()
+        if k == 0:
+            s0, s1, s2 = xi0, xi1, xi2
+        else:
+            s0, s1, s2 = s0 + xi0, s1 + xi1, s2 + xi2
+        x0, x1, x2 = x[k, 0] + bias[0], x[k, 1] + bias[1], x[k, 2] + bias[2]
+        if step_std != 0:
+            x0, x1, x2 = x0 + s0 * step_std, x1 + s1 * step_std, x2 + s2 * step_std
+        x[k, 0], x[k, 1], x[k, 2] = x0, x1, x2
+
+
+@njit(cache=True)
+def _add_white_noise(rng: np.random.Generator, std: float, x: Array) -> None:
+    """x += σ ξ, one standard normal ξ per element of ``x`` (T, 3), drawn row by row."""
+    for k in range(x.shape[0]):
+        for j in range(3):
+            x[k, j] += rng.standard_normal() * std
+
+
+@njit(cache=True)
+def _add_random_errors(
+    rng: np.random.Generator,
+    w: Array,
+    f: Array,
+    b_w: Array,
+    b_f: Array,
+    nu: Array,
+    steps: NDArray[np.integer],
+    walk_std: tuple[float, float],
+    noise_std: tuple[float, float],
+) -> None:
+    """ω' = (((K ω + b) + b_rw) + ν) + δω into ``w`` and f' = ((K f + b) + b_rw) + δf
+    into ``f`` (T, 3), which hold K ω and K f: the terms added in this order as they
+    are drawn (b_rw, b_rw, δω, δf; per-step and noise σ of gyro and accelerometer in
+    ``walk_std`` and ``noise_std``). The drift of sample k is ``nu[steps[k]]``."""
+    _add_bias_and_random_walk(rng, w, b_w, walk_std[0])
+    for k in range(w.shape[0]):
+        for j in range(3):
+            w[k, j] += nu[steps[k], j]
+    _add_bias_and_random_walk(rng, f, b_f, walk_std[1])
+    _add_white_noise(rng, noise_std[0], w)
+    _add_white_noise(rng, noise_std[1], f)
 
 
 def _apply_error_matrix(x: Array, K: Array) -> Array:
@@ -275,12 +321,14 @@ def _apply_error_matrix(x: Array, K: Array) -> Array:
     return x @ K.T
 
 
+@njit(cache=True)
 def _quantise(x: Array, lsb: float) -> None:
-    """x ← round(x / lsb) · lsb in place (nothing for lsb = 0)."""
+    """x ← round(x / lsb) · lsb in place for a C-contiguous ``x``, halves to even as
+    ``np.round`` (nothing for lsb = 0)."""
     if lsb > 0:
-        x /= lsb
-        np.round(x, out=x)
-        x *= lsb
+        flat = x.reshape(-1)  # (contiguous: one loop, vectorised)
+        for i in range(flat.size):
+            flat[i] = np.rint(flat[i] / lsb) * lsb
 
 
 def _saturate(x: Array, limit: float, flags: NDArray[np.bool_]) -> None:
@@ -341,7 +389,6 @@ def simulate_imu(
     f_out = np.empty_like(f_b)
     gyro_sat = np.zeros((n, t), dtype=bool)
     accel_sat = np.zeros((n, t), dtype=bool)
-    draw = np.empty((t, 3))  # one record of draws at a time
     for i, (s, rng) in enumerate(zip(specs, gens, strict=True)):
         # Fixed draw order per walker: errors constant over the record first.
         K_w = _error_matrix(rng, s.gyro_scale_std, s.gyro_misalignment_std)
@@ -351,25 +398,16 @@ def simulate_imu(
         if s.drift_model is DriftModel.PER_GAIT_STEP:
             steps = gait_step_index[i] - gait_step_index[i].min()
             nu = rng.standard_normal((int(steps.max()) + 1, 3)) * s.gyro_step_drift_std
-            drift = np.take(nu, steps, axis=0)
         else:
-            drift = rng.standard_normal((t, 3))
-            drift *= s.gyro_step_drift_std
-        # ω' = (((K ω + b) + b_rw) + ν) + δω and f' = ((K f + b) + b_rw) + δf, the
-        # terms added in this order as they are drawn (b_rw, b_rw, δω, δf).
+            nu = rng.standard_normal((t, 3))
+            nu *= s.gyro_step_drift_std
+            steps = np.arange(t)
         w, f = omega_out[i], f_out[i]
         w[:] = _apply_error_matrix(omega_b[i], K_w)
         f[:] = _apply_error_matrix(f_b[i], K_f)
-        for j in range(3):  # per axis: adding a (3,) row to (T, 3) is several times slower
-            w[:, j] += b_w[j]
-            f[:, j] += b_f[j]
-        _add_bias_random_walk(rng, s.gyro_bias_rw_density * dt**0.5, draw, w)
-        w += drift
-        _add_bias_random_walk(rng, s.accel_bias_rw_density * dt**0.5, draw, f)
-        for x, std in ((w, s.gyro_noise_std(rate_hz)), (f, s.accel_noise_std(rate_hz))):
-            rng.standard_normal(x.shape, out=draw)
-            draw *= std
-            x += draw
+        walk_std = (s.gyro_bias_rw_density * dt**0.5, s.accel_bias_rw_density * dt**0.5)
+        noise_std = (s.gyro_noise_std(rate_hz), s.accel_noise_std(rate_hz))
+        _add_random_errors(rng, w, f, b_w, b_f, nu, steps, walk_std, noise_std)
         _quantise(w, s.gyro_lsb)
         _quantise(f, s.accel_lsb)
         _saturate(w, s.gyro_range, gyro_sat[i])
