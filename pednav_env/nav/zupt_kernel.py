@@ -182,6 +182,30 @@ def _move_sigmas(
 
 
 @njit(cache=True)
+def _weighted_sums(
+    Wm: np.ndarray,
+    sC: np.ndarray,
+    sv: np.ndarray,
+    sp: np.ndarray,
+    Cbar: np.ndarray,
+    vbar: np.ndarray,
+    pbar: np.ndarray,
+) -> None:
+    """Σ Wm_s C_s, Σ Wm_s v_s, Σ Wm_s x_s of sigma points: the mean position after
+    moving them by (D, A, B, τ) is Σ Wm x + τ Σ Wm v + (Σ Wm C) B − ½ g τ² e₃."""
+    for r in range(3):
+        pbar[r] = 0.0
+        vbar[r] = 0.0
+        for c in range(3):
+            Cbar[r, c] = 0.0
+        for s in range(Wm.shape[0]):
+            pbar[r] += Wm[s] * sp[s, r]
+            vbar[r] += Wm[s] * sv[s, r]
+            for c in range(3):
+                Cbar[r, c] += Wm[s] * sC[s, r, c]
+
+
+@njit(cache=True)
 def _finite(C: np.ndarray) -> bool:
     """All entries of a 3 × 3 matrix finite."""
     for r in range(3):
@@ -580,16 +604,7 @@ def advance_block(
         n_acc = 0
         nis_sum = 0.0
         # weighted sums of the anchor's sigma points: the mean position is affine in them
-        for r in range(3):
-            pbar[r] = 0.0
-            vbar[r] = 0.0
-            for c in range(3):
-                Cbar[r, c] = 0.0
-            for s in range(ns):
-                pbar[r] += Wm[s] * sp[s, r]
-                vbar[r] += Wm[s] * sv[s, r]
-                for c in range(3):
-                    Cbar[r, c] += Wm[s] * sC[s, r, c]
+        _weighted_sums(Wm, sC, sv, sp, Cbar, vbar, pbar)
         anchor_bad = not _finite(sC[0])
         if valid[i] == 0:
             position[i, :] = pbar
@@ -679,16 +694,7 @@ def advance_block(
                     A[:] = 0.0
                     B[:] = 0.0
                     F[:] = f_mid  # = D f_mid from the new anchor
-                    for r in range(3):
-                        pbar[r] = 0.0
-                        vbar[r] = 0.0
-                        for c in range(3):
-                            Cbar[r, c] = 0.0
-                        for s in range(ns):
-                            pbar[r] += Wm[s] * sp[s, r]
-                            vbar[r] += Wm[s] * sv[s, r]
-                            for c in range(3):
-                                Cbar[r, c] += Wm[s] * sC[s, r, c]
+                    _weighted_sums(Wm, sC, sv, sp, Cbar, vbar, pbar)
                     anchor_bad = not _finite(sC[0])
             # ---- integrate sample j: state index t = j + 1
             if moving:
