@@ -193,3 +193,33 @@ def test_pednav_run_errors_are_reported(capsys):
     assert main(["run", str(XIO), "--policy", "nonsense"]) == 2
     assert "unknown policy" in capsys.readouterr().err
     assert main(["run", str(XIO), "--format", "pyshoe"]) == 2
+
+
+def test_search_refines_until_the_winner_is_inside_its_grid(monkeypatch):
+    """The selection keeps refining around a winner on the edge of the newest grid
+    and stops once the winner is interior (or an older grid wins). Scores here are
+    a bowl in log-knob space whose minimum lies beyond the stage-1 grid."""
+    from pednav_env.replay import search as search_mod
+
+    best = {"shoe_threshold": 7e7, "process_noise_scale": 0.004, "zupt_noise_scale": 2.0}
+
+    def bowl(recordings, family):
+        lanes = family.lanes()
+        d = [sum(math.log(ln[k] / best[k]) ** 2 for k in best) for ln in lanes]
+        return np.tile(np.array(d), (len(recordings), 1))
+
+    monkeypatch.setattr(search_mod, "score_family", bowl)
+    fams = [f for f in search_mod.default_families() if f.name.startswith("shoe/")]
+    recs = [None] * 4
+    scores = {f.name: bowl(recs, f) for f in fams}
+    by_name = {f.name: f for f in fams}
+    fam, lane, _, stages = search_mod.select(
+        recs, scores, by_name, [f.name for f in fams], np.arange(4)
+    )
+    chosen = by_name[fam].lanes()[lane]
+    # stage 1 picks (5e7, 0.1, 1): noise scale on the grid's edge; refinements walk on
+    assert stages[0]["lane"]["process_noise_scale"] == 0.1
+    assert 2 < len(stages) <= 1 + search_mod.MAX_REFINEMENTS
+    assert not search_mod.on_edge(by_name[fam], chosen)
+    for k in best:  # within one grid step of the optimum
+        assert abs(math.log(chosen[k] / best[k])) < math.log(3.5)

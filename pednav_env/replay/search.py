@@ -8,15 +8,17 @@ one batched filter per recording. The score of a configuration is the mean
 over the recordings of PyShoe's ARMSE (``armse_pyshoe_m``), the figure the
 issue's target compares with; ties are irrelevant at the printed precision.
 
-Two stages: stage 1 is the grid of :func:`default_families`; stage 2 a
-finer grid around the stage-1 winner (:func:`refine_family`: thresholds
-× 0.5…1.5, noise scales × 0.1…3); the choice is over both stages.
+Stages (:func:`select`): stage 1 is the grid of :func:`default_families`;
+each further stage is a finer grid around the current winner
+(:func:`refine_family`: thresholds × 0.5…1.5, noise scales × 0.1…3), and the
+choice is over all stages so far. Refinement goes on while the winner comes
+from the newest grid and sits on its edge in some knob (the optimum may lie
+beyond it), at most :data:`MAX_REFINEMENTS` times.
 
 Honesty check: the trials (sorted by name) are split into two folds (even
-and odd positions); the configuration chosen on one fold is scored on the
-other. The shipped configuration is the one chosen on all trials. (The stage-2 grid
-is built around the all-trials stage-1 winner, so the fold check is exact
-for stage 1 only; both folds chose the same stage-1 configuration.)
+and odd positions); the whole selection, refinements included, is run on one
+fold and its choice scored on the other. The shipped configuration is the
+one chosen on all trials.
 """
 
 from __future__ import annotations
@@ -98,13 +100,25 @@ REFINE_THRESHOLD = (0.5, 0.75, 1.0, 1.5)
 REFINE_SCALE = (0.1, 0.3, 1.0, 3.0)
 
 
-def refine_family(family: Family, lane: dict[str, float]) -> Family:
-    """Stage 2: a finer grid around ``lane`` of ``family`` (same engine choices)."""
+#: Most refinement stages after stage 1.
+MAX_REFINEMENTS = 4
+
+
+def refine_family(family: Family, lane: dict[str, float], stage: int) -> Family:
+    """A finer grid around ``lane`` of ``family`` (same engine choices), named by the
+    stage-1 family, the stage and the centre."""
     grid = {
         k: tuple(v * f for f in (REFINE_SCALE if k.endswith("noise_scale") else REFINE_THRESHOLD))
         for k, v in lane.items()
     }
-    return Family(family.name + "/refined", family.setup, grid)
+    centre = ",".join(f"{v:.3g}" for v in lane.values())
+    base = family.name.split("/stage")[0]
+    return Family(f"{base}/stage{stage}({centre})", family.setup, grid)
+
+
+def on_edge(family: Family, lane: dict[str, float]) -> bool:
+    """Whether ``lane`` takes the smallest or largest grid value of some knob."""
+    return any(lane[k] in (min(v), max(v)) for k, v in family.grid.items())
 
 
 def score_family(recordings: Sequence[Recording], family: Family) -> np.ndarray:
@@ -149,29 +163,58 @@ def setup_for(family: Family, lane: dict[str, float]) -> RealFilterSetup:
     return replace(family.setup, filter=filt)
 
 
+def select(
+    recordings: Sequence[Recording],
+    scores: dict[str, np.ndarray],
+    by_name: dict[str, Family],
+    stage1: Sequence[str],
+    rows: np.ndarray,
+) -> tuple[str, int, float, list[dict[str, Any]]]:
+    """Choose on recordings ``rows``: stage 1 over the families ``stage1``, then
+    refinements around the winner while it sits on the edge of the newest grid.
+    New families are scored on all recordings and cached in ``scores``/``by_name``.
+    Returns (family, lane, mean score on ``rows``, the winner of every stage)."""
+    candidates = list(stage1)
+    fam, lane, mean = choose({n: scores[n] for n in candidates}, rows)
+    path = [{"family": fam, "lane": by_name[fam].lanes()[lane], "mean_armse_pyshoe_m": mean}]
+    for stage in range(2, 2 + MAX_REFINEMENTS):
+        if fam != candidates[-1] and stage > 2:
+            break  # the newest grid did not win: its centre is the optimum
+        if stage > 2 and not on_edge(by_name[fam], by_name[fam].lanes()[lane]):
+            break
+        refined = refine_family(by_name[fam], by_name[fam].lanes()[lane], stage)
+        if refined.name not in scores:
+            scores[refined.name] = score_family(recordings, refined)
+            by_name[refined.name] = refined
+        candidates.append(refined.name)
+        fam, lane, mean = choose({n: scores[n] for n in candidates}, rows)
+        path.append(
+            {"family": fam, "lane": by_name[fam].lanes()[lane], "mean_armse_pyshoe_m": mean}
+        )
+    return fam, lane, mean, path
+
+
 def search(
     recordings: Sequence[Recording], families: Sequence[Family] | None = None
 ) -> dict[str, Any]:
-    """Run the search; returns the chosen setup, the fold check and the full table."""
+    """Run the search; returns the chosen setup, its stages, the fold check and the
+    best configurations."""
     families = list(families or default_families())
     scores = {f.name: score_family(recordings, f) for f in families}
     by_name = {f.name: f for f in families}
+    stage1 = [f.name for f in families]
     n = len(recordings)
     all_rows = np.arange(n)
-    fam, lane, _ = choose(scores, all_rows)
-    stage1 = {"family": fam, "lane": by_name[fam].lanes()[lane]}
-    refined = refine_family(by_name[fam], by_name[fam].lanes()[lane])
-    scores[refined.name] = score_family(recordings, refined)
-    by_name[refined.name] = refined
-    fam, lane, mean = choose(scores, all_rows)
+    fam, lane, mean, stages = select(recordings, scores, by_name, stage1, all_rows)
     folds = []
     for a, b in ((all_rows[0::2], all_rows[1::2]), (all_rows[1::2], all_rows[0::2])):
-        fa, la, ma = choose(scores, a)
+        fa, la, ma, fold_stages = select(recordings, scores, by_name, stage1, a)
         folds.append(
             {
                 "select_on": [recordings[i].name for i in a],
                 "family": fa,
                 "lane": by_name[fa].lanes()[la],
+                "stages": len(fold_stages),
                 "score_on_selection": ma,
                 "score_on_other_fold": float(scores[fa][b, la].mean()),
                 "all_trials_config_on_other_fold": float(scores[fam][b, lane].mean()),
@@ -191,7 +234,7 @@ def search(
     table.sort(key=lambda r: r["mean_armse_pyshoe_m"])
     return {
         "setup": chosen.to_dict(),
-        "stage1": stage1,
+        "stages": stages,
         "chosen": {"family": fam, "lane": by_name[fam].lanes()[lane], "mean_armse_pyshoe_m": mean},
         "per_trial_armse_pyshoe_m": dict(
             zip([r.name for r in recordings], scores[fam][:, lane].tolist(), strict=True)
