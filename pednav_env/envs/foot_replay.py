@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -10,16 +9,9 @@ from gymnasium.vector import AutoresetMode
 
 from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
 from pednav_env.envs.foot_zupt import FootZuptEnv, FootZuptVectorEnv
-from pednav_env.envs.native import lane_spaces
+from pednav_env.envs.native import lane_spaces, make_config
 
 ENV_ID = "pednav/FootZuptReplay-v0"
-
-
-def _make_config(config: FootReplayConfig | None, **overrides: Any) -> FootReplayConfig:
-    fields = {k: v for k, v in overrides.items() if v is not None}
-    if config is None:
-        return FootReplayConfig(**fields)
-    return replace(config, **fields) if fields else config
 
 
 class FootZuptReplayEnv(FootZuptEnv):
@@ -99,7 +91,8 @@ class FootZuptReplayEnv(FootZuptEnv):
         config: FootReplayConfig | None = None,
         render_mode: str | None = None,
     ) -> None:
-        self.replay_config = _make_config(
+        self.replay_config = make_config(
+            FootReplayConfig,
             config,
             data_dir=None if data_dir is None else str(data_dir),
             decision_interval_s=decision_interval_s,
@@ -140,7 +133,8 @@ class FootZuptReplayVectorEnv(FootZuptVectorEnv):
         render_mode: str | None = None,
     ) -> None:
         self.reject_render_mode(ENV_ID, render_mode)
-        self.replay_config = _make_config(
+        self.replay_config = make_config(
+            FootReplayConfig,
             config,
             data_dir=None if data_dir is None else str(data_dir),
             decision_interval_s=decision_interval_s,

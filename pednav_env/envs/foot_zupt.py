@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -14,17 +13,9 @@ from pednav_env.envs.foot_core import (
     FootZuptConfig,
     FootZuptCore,
 )
-from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces, make_config
 
 ENV_ID = "pednav/FootZupt-v0"
-
-
-def _make_config(config: FootZuptConfig | None, **overrides: Any) -> FootZuptConfig:
-    fields = {k: v for k, v in overrides.items() if v is not None}
-    if config is None:
-        return FootZuptConfig(**fields)
-    return replace(config, **fields) if fields else config
-
 
 
 class FootZuptEnv(NativeScalarEnv):
@@ -153,7 +144,8 @@ class FootZuptEnv(NativeScalarEnv):
         config: FootZuptConfig | None = None,
         render_mode: str | None = None,
     ) -> None:
-        self.config = _make_config(
+        self.config = make_config(
+            FootZuptConfig,
             config,
             scenario=scenario,
             decision_interval_s=decision_interval_s,
@@ -184,7 +176,8 @@ class FootZuptVectorEnv(NativeVectorEnv):
         render_mode: str | None = None,
     ) -> None:
         self.reject_render_mode(ENV_ID, render_mode)
-        self.config = _make_config(
+        self.config = make_config(
+            FootZuptConfig,
             config,
             scenario=scenario,
             decision_interval_s=decision_interval_s,

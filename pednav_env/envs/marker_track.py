@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -13,19 +12,11 @@ from pednav_env.envs.marker_core import (
     MarkerTrackConfig,
     MarkerTrackCore,
 )
-from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces, make_config
 
 ENV_ID = "pednav/MarkerTrack-v0"
 #: Seconds of track shown by :meth:`MarkerTrackEnv.render`.
 RENDER_WINDOW_S = 3.0
-
-
-def _make_config(config: MarkerTrackConfig | None, **overrides: Any) -> MarkerTrackConfig:
-    fields = {k: v for k, v in overrides.items() if v is not None}
-    if config is None:
-        return MarkerTrackConfig(**fields)
-    return replace(config, **fields) if fields else config
-
 
 
 class MarkerTrackEnv(NativeScalarEnv):
@@ -166,8 +157,12 @@ class MarkerTrackEnv(NativeScalarEnv):
         config: MarkerTrackConfig | None = None,
         render_mode: str | None = None,
     ) -> None:
-        self.config = _make_config(
-            config, scenario=scenario, decision_interval_s=decision_interval_s, rate_hz=rate_hz
+        self.config = make_config(
+            MarkerTrackConfig,
+            config,
+            scenario=scenario,
+            decision_interval_s=decision_interval_s,
+            rate_hz=rate_hz,
         )
         self.render_mode = render_mode
         self.core = MarkerTrackCore(self.config, 1, ENV_ID)
@@ -212,8 +207,12 @@ class MarkerTrackVectorEnv(NativeVectorEnv):
         render_mode: str | None = None,
     ) -> None:
         self.reject_render_mode(ENV_ID, render_mode)
-        self.config = _make_config(
-            config, scenario=scenario, decision_interval_s=decision_interval_s, rate_hz=rate_hz
+        self.config = make_config(
+            MarkerTrackConfig,
+            config,
+            scenario=scenario,
+            decision_interval_s=decision_interval_s,
+            rate_hz=rate_hz,
         )
         core = MarkerTrackCore(self.config, int(num_envs), ENV_ID)
         self.attach_core(core, self.config.action_dim)

@@ -19,7 +19,8 @@ lane is reset within the same ``step``; its last observation and info are in
 
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import replace
+from typing import Any, TypeVar
 
 import gymnasium as gym
 import numpy as np
@@ -125,6 +126,19 @@ class NativeScalarEnv(gym.Env):
 
             plt.close(self._figure)
             self._figure = None
+
+
+ConfigT = TypeVar("ConfigT")
+
+
+def make_config(cls: type[ConfigT], config: ConfigT | None, **overrides: Any) -> ConfigT:
+    """An env's frozen config from its constructor arguments: ``config`` (or the
+    defaults of ``cls``) with the keyword arguments that were given (not None)
+    replaced."""
+    fields = {k: v for k, v in overrides.items() if v is not None}
+    if config is None:
+        return cls(**fields)
+    return replace(config, **fields) if fields else config  # type: ignore[type-var]
 
 
 def lane_spaces(core: Any, action_dim: int) -> tuple[spaces.Box, spaces.Box]:

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces, make_config
 from pednav_env.envs.waist_core import (
     ACTION_DIM,
     ACTION_KNOBS,
@@ -18,14 +17,6 @@ from pednav_env.envs.waist_core import (
 )
 
 ENV_ID = "pednav/WaistStep-v0"
-
-
-def _make_config(config: WaistStepConfig | None, **overrides: Any) -> WaistStepConfig:
-    fields = {k: v for k, v in overrides.items() if v is not None}
-    if config is None:
-        return WaistStepConfig(**fields)
-    return replace(config, **fields) if fields else config
-
 
 
 class WaistStepEnv(NativeScalarEnv):
@@ -172,7 +163,8 @@ class WaistStepEnv(NativeScalarEnv):
         config: WaistStepConfig | None = None,
         render_mode: str | None = None,
     ) -> None:
-        self.config = _make_config(
+        self.config = make_config(
+            WaistStepConfig,
             config,
             scenario=scenario,
             decision_interval_s=decision_interval_s,
@@ -203,7 +195,8 @@ class WaistStepVectorEnv(NativeVectorEnv):
         render_mode: str | None = None,
     ) -> None:
         self.reject_render_mode(ENV_ID, render_mode)
-        self.config = _make_config(
+        self.config = make_config(
+            WaistStepConfig,
             config,
             scenario=scenario,
             decision_interval_s=decision_interval_s,
