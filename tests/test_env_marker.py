@@ -22,7 +22,6 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import pednav_env  # noqa: F401  (registers the environments)
-from agents.bench_marker import FilterpyMarkerEngine
 from pednav_env.envs import marker_track
 from pednav_env.envs.marker_core import (
     MarkerTrackConfig,
@@ -33,6 +32,7 @@ from pednav_env.envs.marker_core import (
 from pednav_env.gait.heel_knee import simulate_heel_knee
 from pednav_env.nav.marker_ekf import MarkerEkfConfig, MarkerEkfEngine, run_marker_ekf
 from pednav_env.sensors.uwb import measure_uwb
+from pednav_env.testing.reference_marker import FilterpyMarkerEngine
 
 ENV_ID = "pednav/MarkerTrack-v0"
 #: Short walks with gait changes and frequent re-anchoring, for fast tests.

@@ -19,7 +19,6 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import pednav_env  # noqa: F401  (registers the environments)
-from agents.bench_waist import FilterpyWaistReference
 from pednav_env.envs import waist_step
 from pednav_env.envs.waist_core import (
     WaistRandomization,
@@ -31,6 +30,7 @@ from pednav_env.envs.waist_core import (
 from pednav_env.nav.step_fusion_kf import StepFusionKF
 from pednav_env.nav.waist_dr import biomechanical_step_velocity
 from pednav_env.sensors.ins_error import CHANNEL_SIGN, schuler_transition
+from pednav_env.testing.reference_waist import FilterpyWaistReference
 
 ENV_ID = "pednav/WaistStep-v0"
 SHORT = WaistStepConfig(randomization=WaistRandomization(duration_s=(12.0, 20.0)))

@@ -8,20 +8,11 @@ relative over a whole simulated walk.
 """
 
 import numpy as np
-from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
 from pednav_env.nav.alignment import align_static
-from pednav_env.nav.zupt_ukf import (
-    ZuptUkf,
-    ZuptUkfConfig,
-    measure,
-    process_noise,
-    propagate_state,
-    state_add,
-    state_mean,
-    state_residual,
-)
+from pednav_env.nav.zupt_ukf import ZuptUkf, ZuptUkfConfig, process_noise, propagate_state
 from pednav_env.sensors.imu import ImuSpec, simulate_imu
+from pednav_env.testing.reference_foot import filterpy_zupt_ukf, zupt_noise
 
 RATE = 100.0
 
@@ -50,22 +41,11 @@ def test_engine_equals_filterpy_over_a_whole_walk(paper_walk):
     def fx(x, dt, omega_seg, f_seg):
         return propagate_state(x[None, None], omega_seg[None], f_seg[None], RATE)[0, 0]
 
-    points = MerweScaledSigmaPoints(9, alpha=cfg.alpha, beta=cfg.beta, kappa=cfg.kappa)
-    ukf = UnscentedKalmanFilter(
-        dim_x=9,
-        dim_z=4,
-        dt=1 / RATE,
-        hx=measure,
-        fx=fx,
-        points=points,
-        x_mean_fn=state_mean,
-        residual_x=state_residual,
-        state_add=state_add,
-    )
+    ukf = filterpy_zupt_ukf(cfg, RATE, fx)
     n_align = int(round(cfg.alignment_s * RATE))
     x0, P0 = engine.initial_state(align_static(f[:, :n_align]))
     ukf.x, ukf.P = x0[0].copy(), P0[0].copy()
-    R = np.diag([cfg.zupt_height_std**2] + [cfg.zupt_velocity_std**2] * 3)
+    R = zupt_noise(cfg)
     last = n_align
     for k, rec in enumerate(history):
         m = rec.sample

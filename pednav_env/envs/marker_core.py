@@ -361,7 +361,7 @@ def generate_episode(
 class Engine(Protocol):
     """What the core needs from a batched marker filter (lane axis last):
     :class:`~pednav_env.nav.marker_ekf.MarkerEkfEngine`, or the benchmark's
-    filterpy reference (``agents.bench_marker.FilterpyMarkerEngine``)."""
+    filterpy reference (``pednav_env.testing.reference_marker.FilterpyMarkerEngine``)."""
 
     x: Array  # (6, N)
     P: Array  # (6, 6, N)

@@ -1,22 +1,15 @@
-"""Throughput of ``pednav/WaistStep-v0``: the native vector env against filterpy.
+"""Paper 004's step-fusion filter as two plain ``filterpy.kalman.KalmanFilter`` objects.
 
-``pednav bench waist [--json]`` measures, for N = 1, 16, 64, 256, the env
-steps per second of the native vector env (all N walks through one batched
-detector and step-fusion filter, paper policy, autoresets included) and, in
-the same process, of a reference that steps N scalar environments one after
-another. Each reference environment plays the same episodes and does the same
-work the ordinary way: it streams its sensor samples one at a time through
-the engine's step detector (:func:`pednav_env.nav.waist_dr.detect_steps` with
-N = 1 and its carried state, as ``bench_foot`` streams the stance detector),
-and at each detected step computes V̄^INS, the pendulum step velocity with the
-library's :func:`~pednav_env.nav.waist_dr.biomechanical_step_velocity` on the
-step's samples, and runs two ``filterpy.kalman.KalmanFilter`` objects (east
-and north channel of paper 004) through ``predict(F=Φ(T), Q=Q)`` and
-``update(S)``, with the position of eqs (5)–(6); at the end of each interval
-it forms the position estimate and its error, like the env.
-
-JSON: ``{"bench": "waist", "rows": [{"num_envs": 256, "steps_per_s": ..,
-"reference_steps_per_s": .., "ratio": ..}, ...]}`` (plus ``peak_rss_mb``).
+:class:`FilterpyWaistReference` is one scalar ``pednav/WaistStep-v0`` environment
+(paper policy by default) doing the env's work the ordinary way: it plays the
+same episodes, streams its sensor samples one at a time through the engine's step
+detector (:func:`pednav_env.nav.waist_dr.detect_steps` with N = 1 and its carried
+state), and at each detected step computes V̄^INS, the pendulum step velocity with
+the library's :func:`~pednav_env.nav.waist_dr.biomechanical_step_velocity` on the
+step's samples, and runs two ``KalmanFilter`` objects (east and north channel of
+paper 004) through ``predict(F=Φ(T), Q=Q)`` and ``update(S)``, with the position of
+eqs (5)–(6); at the end of each interval it forms the position estimate and its
+error, like the env. The env's oracle test and ``pednav bench waist`` use it.
 """
 
 from __future__ import annotations
@@ -27,9 +20,7 @@ import numpy as np
 from filterpy.kalman import KalmanFilter
 from gymnasium.utils import seeding
 
-from agents.bench_common import DEFAULT_SIZES, bench_result, bench_row, timed_calls
 from pednav_env.envs.waist_core import WaistStepConfig, generate_episode
-from pednav_env.envs.waist_step import WaistStepVectorEnv
 from pednav_env.nav.step_fusion_kf import H_DV
 from pednav_env.nav.waist_dr import (
     StepDetectorConfig,
@@ -152,27 +143,3 @@ class FilterpyWaistReference:
             self._new_episode()
             return True
         return False
-
-
-def bench_waist(
-    sizes: tuple[int, ...] = DEFAULT_SIZES,
-    min_seconds: float = 3.0,
-    reference_seconds: float = 3.0,
-    config: WaistStepConfig | None = None,
-) -> dict[str, Any]:
-    """Steps per second of the native vector env and of the filterpy reference."""
-    config = config or WaistStepConfig()
-    rows = []
-    for n in sizes:
-        env = WaistStepVectorEnv(num_envs=n, config=config)
-        env.reset(seed=0)
-        zeros = np.zeros((n, config.action_dim), np.float32)
-        env.step(zeros)  # warm-up
-        calls, elapsed = timed_calls(lambda env=env, z=zeros: env.step(z), min_seconds, 3)
-        env.close()
-        refs = [FilterpyWaistReference(config, seed=i) for i in range(n)]
-        ref_calls, ref_elapsed = timed_calls(
-            lambda refs=refs: [r.step() for r in refs], reference_seconds, 1
-        )
-        rows.append(bench_row(n, calls, elapsed, ref_calls, ref_elapsed))
-    return bench_result("waist", rows)

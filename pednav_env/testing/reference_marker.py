@@ -1,30 +1,16 @@
-"""Throughput benchmark of ``pednav/MarkerTrack-v0`` against a filterpy reference.
+"""The marker EKF of paper 001 as plain ``filterpy.kalman.ExtendedKalmanFilter`` objects.
 
-``pednav bench marker [--json]`` measures, for N = 1, 16, 64, 256, the env
-steps per second of the native vector env (all N walks in one batched
-filter, paper policy, autoresets included) and, in the same process, of a
-reference that steps N scalar environments one after another, each with its
-own ``filterpy.kalman.ExtendedKalmanFilter`` doing the same work: the scalar
-environment's own episode core (:class:`MarkerTrackCore` with N = 1: the same
-episodes, features, rewards, re-anchoring and divergence checks) whose
-filter is a plain filterpy EKF used the ordinary way — ``predict()`` with
-F = d I and Q = Γ Q Γᵀ, ``update(z, HJacobian, Hx, R)`` with the model
-functions of :mod:`pednav_env.nav.marker_ekf` (eq 4.10 / 5.3) on the valid
-coordinates of each sample.
-
-The two loops are timed in alternating chunks of 0.25 s until each has run
-``min_seconds`` / ``reference_seconds`` (3 s), so that both see the same load
-on a shared machine.
-
-JSON: ``{"bench": "marker", "rows": [{"num_envs": 256, "steps_per_s": ..,
-"reference_steps_per_s": .., "ratio": ..}, ...]}`` (plus ``peak_rss_mb``).
+:class:`FilterpyMarkerEngine` has the engine interface of :class:`MarkerTrackCore`
+over one filterpy EKF per lane, used the ordinary way — ``predict()`` with F = d I
+and Q = Γ Q Γᵀ, ``update(z, HJacobian, Hx, R)`` with the model functions of
+:mod:`pednav_env.nav.marker_ekf` (eq 4.10 / 5.3) on the valid coordinates of each
+sample. :class:`ReferenceMarkerEnv` is one scalar environment around it: the env's
+own episode core (:class:`MarkerTrackCore` with N = 1: the same episodes,
+features, rewards, re-anchoring and divergence checks) with the filterpy engine.
+The env's oracle test and ``pednav bench marker`` use them.
 """
 
 from __future__ import annotations
-
-import time
-from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
@@ -32,9 +18,8 @@ from gymnasium.utils import seeding
 from numpy.typing import NDArray
 from scipy.linalg import solve_triangular
 
-from agents.bench_common import DEFAULT_SIZES, bench_result, bench_row
 from pednav_env.envs.marker_core import MarkerTrackConfig, MarkerTrackCore
-from pednav_env.envs.marker_track import ENV_ID, MarkerTrackVectorEnv
+from pednav_env.envs.marker_track import ENV_ID
 from pednav_env.nav.marker_ekf import (
     DIM_X,
     DIM_Z,
@@ -150,58 +135,3 @@ class ReferenceMarkerEnv:
         _, _, terminated, truncated, _ = self.core.step(self.zeros)
         if terminated[0] or truncated[0]:
             self.core.reset_lanes(np.array([0]), [self.rng])
-
-
-def _interleaved(
-    native: Callable[[], None],
-    reference: Callable[[], None],
-    min_seconds: float,
-    reference_seconds: float,
-    chunk_seconds: float = 0.25,
-) -> tuple[int, float, int, float]:
-    """Time both loops in alternating chunks until each has run its minimum time.
-
-    On a shared machine the load drifts; alternating keeps the two measurements
-    under the same conditions, so their ratio is stable. Returns (calls, seconds)
-    of the native loop, then of the reference.
-    """
-    n_calls = r_calls = 0
-    n_time = r_time = 0.0
-    while n_time < min_seconds or r_time < reference_seconds or not (n_calls and r_calls):
-        for fn, is_native in ((native, True), (reference, False)):
-            start = time.perf_counter()
-            calls = 0
-            while calls == 0 or time.perf_counter() - start < chunk_seconds:
-                fn()
-                calls += 1
-            elapsed = time.perf_counter() - start
-            if is_native:
-                n_calls, n_time = n_calls + calls, n_time + elapsed
-            else:
-                r_calls, r_time = r_calls + calls, r_time + elapsed
-    return n_calls, n_time, r_calls, r_time
-
-
-def bench_marker(
-    sizes: tuple[int, ...] = DEFAULT_SIZES,
-    min_seconds: float = 3.0,
-    reference_seconds: float = 3.0,
-    config: MarkerTrackConfig | None = None,
-) -> dict[str, Any]:
-    """Steps per second of the native vector env and of the filterpy reference."""
-    config = config or MarkerTrackConfig()
-    rows = []
-    for n in sizes:
-        env = MarkerTrackVectorEnv(num_envs=n, config=config)
-        env.reset(seed=0)
-        zeros = np.zeros((n, config.action_dim), np.float32)
-        env.step(zeros)  # warm-up
-        refs = [ReferenceMarkerEnv(config, seed=i) for i in range(n)]
-        calls, elapsed, ref_calls, ref_elapsed = _interleaved(
-            lambda env=env, z=zeros: env.step(z),
-            lambda refs=refs: [r.step() for r in refs],
-            min_seconds,
-            reference_seconds,
-        )
-        rows.append(bench_row(n, calls, elapsed, ref_calls, ref_elapsed))
-    return bench_result("marker", rows)
