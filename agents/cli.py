@@ -13,6 +13,9 @@ Subcommands (their JSON formats are contracts, see DESIGN.md):
   — the ZUPT-UKF on a recorded walk (docs/REAL_DATA.md).
 - ``pednav bench ENV [--json] [--sizes N ...]`` — env steps/s of the native
   vector env against a filterpy reference (ENV = foot, waist, marker).
+- ``pednav sim2real RECORDING... [--model M] [--walks N] [--json] [--plot DIR]``
+  — the foot simulator beside recorded walks per speed band
+  (docs/SIM_TO_REAL.md).
 """
 
 from __future__ import annotations
@@ -205,7 +208,55 @@ def build_parser() -> argparse.ArgumentParser:
     ru.add_argument("--json", action="store_true", help="print one JSON object")
     ru.add_argument("--plot", metavar="FILE", default=None, help="write a top view to FILE")
     ru.set_defaults(func=_cmd_run)
+    _add_sim2real(sub)
     return parser
+
+
+def _cmd_sim2real(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from pednav_env.calibration.compare import MODELS, compare
+    from pednav_env.calibration.sources import load_walk
+    from pednav_env.calibration.stats import walk_stats
+    from pednav_env.io import find_recordings
+
+    if args.model not in MODELS:
+        raise ValueError(f"--model {args.model!r}: use one of {', '.join(MODELS)}")
+    paths = []
+    for item in args.recordings:
+        p = Path(item)
+        paths.extend(find_recordings(p) if p.is_dir() else [p])
+    if not paths:
+        raise ValueError(f"no recordings (.csv, .mat) in {' '.join(args.recordings)}")
+    real = [walk_stats(load_walk(p)) for p in paths]
+    report = compare(real, MODELS[args.model], args.walks, args.seed)
+    if args.plot is not None:
+        from pednav_env.calibration.plots import write_figures
+
+        for path in write_figures(report, args.plot):
+            print(f"wrote {path}", file=sys.stderr)
+    print(json.dumps(report.to_json()) if args.json else report.format_text())
+    return 0
+
+
+def _add_sim2real(sub: argparse._SubParsersAction) -> None:
+    s2r = sub.add_parser(
+        "sim2real", help="the foot simulator beside recorded walks (docs/SIM_TO_REAL.md)"
+    )
+    s2r.add_argument("recordings", nargs="+", help=".mat/.csv recordings or directories of them")
+    s2r.add_argument(
+        "--model", default="calibrated", help="calibrated or today (default calibrated)"
+    )
+    s2r.add_argument(
+        "--walks",
+        type=_positive_int,
+        default=20,
+        help="simulated walks per speed band (default 20)",
+    )
+    s2r.add_argument("--seed", type=int, default=0, help="simulation seed (default 0)")
+    s2r.add_argument("--json", action="store_true", help="print one JSON object")
+    s2r.add_argument("--plot", metavar="DIR", default=None, help="write histograms to DIR")
+    s2r.set_defaults(func=_cmd_sim2real)
 
 
 def _positive_int(text: str) -> int:

@@ -61,6 +61,8 @@ from pednav_env.gait.foot_kernels import (
 from pednav_env.gait.foot_route import Route
 from pednav_env.gait.lever_arm import Vec, lever_arm_rows
 from pednav_env.gait.splines import clamped_cubic_coefficients
+from pednav_env.gait.stance_motion import COLUMNS as STANCE_COLUMNS
+from pednav_env.gait.stance_motion import stance_table
 
 Array = NDArray[np.float64]
 
@@ -347,9 +349,25 @@ def _kernel_walk(sched: _Schedule, route: Route) -> tuple[Array, ...]:
     """The walk as the tuple of arrays the kernels of :mod:`pednav_env.gait.foot_kernels`
     take: breaks, coefficients, piece kinds, sin ψ and cos ψ of every piece's constant
     term; roll-over windows (start, end, speed) and micro-motion phases; heel strikes
-    (time, speed, heading after). Routes without realism get no windows and strikes."""
+    (time, speed, heading after); the stances of the calibrated model (start, end,
+    parameters). Routes without realism get no windows and strikes; routes without
+    ``stance_motion`` no calibrated stances. With ``stance_motion``, the realistic
+    roll-over windows are left out (the calibrated model replaces them) and stance
+    pieces are evaluated as straight pieces (their roll moves)."""
     psi = sched.coefs[3, 3]
-    if route.realistic:
+    kinds = sched.piece_kind
+    calibrated = (np.zeros(0), np.zeros(0), np.zeros((0, len(STANCE_COLUMNS))))
+    if route.stance_motion is not None:
+        moving = sched.stance_speed > 0  # the last T₀ of every moving stance (no stops)
+        start = np.maximum(sched.stance_start, sched.stance_end - sched.stance_nominal_s)
+        table = stance_table(route.stance_motion, sched.stance_speed[moving])
+        calibrated = (start[moving], sched.stance_end[moving], table)
+        kinds = np.where(kinds == STANCE, STRAIGHT, kinds).astype(np.int8)
+    if route.realistic and route.stance_motion is not None:
+        windows = (np.zeros(0), np.zeros(0), np.zeros(0))
+        phases = np.zeros(3)
+        strikes = (sched.strike_t, sched.strike_speed, sched.strike_forward)
+    elif route.realistic:
         moving = sched.stance_speed > 0  # roll-over: the last T₀ of every moving stance
         start = np.maximum(sched.stance_start, sched.stance_end - sched.stance_nominal_s)
         windows = (start[moving], sched.stance_end[moving], sched.stance_speed[moving])
@@ -359,8 +377,10 @@ def _kernel_walk(sched: _Schedule, route: Route) -> tuple[Array, ...]:
         windows = (np.zeros(0), np.zeros(0), np.zeros(0))
         phases = np.zeros(3)
         strikes = (np.zeros(0), np.zeros(0), np.zeros((0, 2)))
-    arrays = (sched.breaks, sched.coefs, sched.piece_kind, np.sin(psi), np.cos(psi))
-    return tuple(np.ascontiguousarray(a) for a in (*arrays, *windows, phases, *strikes))
+    arrays = (sched.breaks, sched.coefs, kinds, np.sin(psi), np.cos(psi))
+    return tuple(
+        np.ascontiguousarray(a) for a in (*arrays, *windows, phases, *strikes, *calibrated)
+    )
 
 
 def _simulate_walk(

@@ -37,6 +37,7 @@ from pednav_env.gait.lever_arm import (
     imu_readings,
     imu_velocity,
 )
+from pednav_env.gait.stance_motion import stance_motion
 
 Vec3 = tuple[float, float, float]
 
@@ -281,13 +282,14 @@ def simulate_walk(
     breaks, coefs, kinds, sin_psi, cos_psi = walk[0], walk[1], walk[2], walk[3], walk[4]
     w_start, w_end, w_speed, phases = walk[5], walk[6], walk[7], walk[8]
     s_time, s_speed, s_forward = walk[9], walk[10], walk[11]
+    c_start, c_end, c_par = walk[12], walk[13], walk[14]
     micro_phases = (phases[0], phases[1], phases[2])
     last, t_end = breaks.size - 2, breaks[-1]
-    n_windows, n_strikes = w_start.size, s_time.size
+    n_windows, n_strikes, n_calibrated = w_start.size, s_time.size, c_start.size
     n = omega.shape[0]
     y = np.zeros((3, 6))  # rows x, y, z, ψ, θ, γ of [value, first, second derivative]
     h = np.zeros((2, 6))  # readings at the two nodes
-    p, window, strike = 0, -1, -1
+    p, window, strike, calibrated = 0, -1, -1, -1
     for m in range(n + 1):
         for k in range(-1, 2 if m < n else 0):  # −1: the state at t_m; 0, 1: the nodes
             reading = k >= 0
@@ -328,6 +330,14 @@ def simulate_walk(
                     y[d, 0] += bump[d] * fx
                     y[d, 1] += bump[d] * fy
                     y[d, 2] += bump[d]
+            while calibrated + 1 < n_calibrated and c_start[calibrated + 1] <= t:
+                calibrated += 1
+            j = calibrated
+            if j >= 0 and t < c_end[j]:
+                pitch, roll = stance_motion(n_values, t, c_start[j], c_end[j], c_par[j])
+                for d in range(n_values):
+                    y[d, 4] += pitch[d]
+                    y[d, 5] += roll[d]
             heel_rows = (
                 (y[0, 0], y[0, 1], y[0, 2]),
                 (y[1, 0], y[1, 1], y[1, 2]),

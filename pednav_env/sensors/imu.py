@@ -202,6 +202,37 @@ class ImuSpec:
         )
 
     @classmethod
+    def microstrain_gx5(cls) -> ImuSpec:
+        """MicroStrain 3DM-GX5-25, the IMU of the PyShoe VICON trials and the
+        hallway walks (docs/SIM_TO_REAL.md). Datasheet (8400-0093): gyro noise
+        density 0.005 °/s/√Hz, in-run bias instability 8 °/h; accelerometer
+        noise density 100 µg/√Hz, bias instability 0.04 mg (PyShoe's SHOE
+        σ_ω = 8.7266e-5 rad/s and σ_a = 0.00098 m/s² are these densities).
+        Bias instability as a random walk reaching it in 100 s (8 °/h /
+        √(100 s), 0.04 mg / √(100 s)). Ranges: the recorded walks reach
+        9.2 rad/s and 13.9 g, beyond the standard ±300 °/s and ±8 g, so the
+        ±900 °/s and ±20 g options. Not in the datasheet, assumed: residual
+        turn-on biases 0.05 °/s and 2 mg, 0.1 % scale, 0.05° misalignment,
+        no quantisation (the unit outputs floats). No per-gait-step drift."""
+        deg = math.pi / 180.0
+        mg = 1e-3 * STANDARD_GRAVITY
+        return cls(
+            gyro_noise_density=0.005 * deg,
+            accel_noise_density=0.1 * mg,
+            gyro_step_drift_std=0.0,
+            gyro_bias_std=0.05 * deg,
+            accel_bias_std=2.0 * mg,
+            gyro_bias_rw_density=8.0 / 3600.0 * deg / 10.0,
+            accel_bias_rw_density=0.04 * mg / 10.0,
+            gyro_scale_std=0.001,
+            accel_scale_std=0.001,
+            gyro_misalignment_std=0.05 * deg,
+            accel_misalignment_std=0.05 * deg,
+            gyro_range=900.0 * deg,
+            accel_range=20.0 * STANDARD_GRAVITY,
+        )
+
+    @classmethod
     def ideal(cls) -> ImuSpec:
         """No errors at all (for kinematics and strapdown tests)."""
         return cls(gyro_noise_density=0.0, accel_noise_density=0.0, gyro_step_drift_std=0.0)
@@ -213,6 +244,7 @@ IMU_GRADES = {
     "adis16405": ImuSpec.adis16405,
     "adis16470": ImuSpec.adis16470,
     "consumer": ImuSpec.consumer,
+    "microstrain_gx5": ImuSpec.microstrain_gx5,
     "ideal": ImuSpec.ideal,
 }
 

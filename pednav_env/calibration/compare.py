@@ -1,0 +1,246 @@
+"""The foot simulator beside recorded walks, per speed band (``pednav sim2real``).
+
+For each speed band (:data:`SPEED_BANDS`): the recordings whose walking speed
+falls in it (:mod:`pednav_env.calibration.stats`), ``walks_per_band``
+simulated walks of that band's speeds (:func:`pednav_env.gait.foot_route.speed_route`,
+one walker's stance dynamics and IMU errors per walk: domain
+randomisation), and
+
+- the simulator's **envelope**: the 5–95 % range over the simulated walks of
+  their p10 and of their p50 of log10 SHOE;
+- **coverage**: whether a recording's p10 and p50 both fall inside its band's
+  envelopes;
+- the **width check**: how much wider (decades) each envelope is than the
+  real spread (max − min over the band's recordings);
+- a **distance**: the 1-Wasserstein distance between the pooled log10 SHOE
+  samples of the recordings and of the simulated walks.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.stats import wasserstein_distance
+
+from pednav_env.calibration.sources import samples_from_simulation
+from pednav_env.calibration.stats import WalkStats, walk_stats
+from pednav_env.gait.foot import FootSimConfig, simulate_foot
+from pednav_env.gait.foot_route import SpeedRouteConfig, speed_route
+from pednav_env.gait.stance_motion import StanceRandomization
+from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
+
+#: Speed bands (m/s), lower bound included.
+SPEED_BANDS = ((0.3, 0.8), (0.8, 1.3), (1.3, 1.8), (1.8, 2.6), (2.6, math.inf))
+#: Fastest simulated speed (m/s), the top of the open band.
+SIM_TOP_SPEED_MPS = 3.8
+#: Envelope quantiles over simulated walks (%).
+ENVELOPE_PERCENT = (5.0, 95.0)
+#: Simulated walks are this long (s) before their stands, at this rate (Hz).
+SIM_DURATION_S = (30.0, 60.0)
+SIM_RATE_HZ = 200.0
+
+
+def band_label(band: tuple[float, float]) -> str:
+    lo, hi = band
+    return f">{lo:g}" if math.isinf(hi) else f"{lo:g}-{hi:g}"
+
+
+def band_of(speed_mps: float) -> tuple[float, float] | None:
+    """The band holding ``speed_mps`` (None below the first or for NaN)."""
+    for lo, hi in SPEED_BANDS:
+        if lo <= speed_mps < hi:
+            return (lo, hi)
+    return None
+
+
+@dataclass(frozen=True)
+class SimModel:
+    """A simulator configuration: IMU grade and stance dynamics.
+
+    ``stance`` None: today's realistic stance terms (roll-over A = 0.011 v²,
+    micro-motion 0.2 v² mm at mid-stance; :mod:`pednav_env.gait.foot`).
+    """
+
+    name: str
+    imu_grade: str
+    stance: StanceRandomization | None = None
+
+    def __post_init__(self) -> None:
+        if self.imu_grade not in IMU_GRADES:
+            raise ValueError(f"unknown IMU grade {self.imu_grade!r}; known: {sorted(IMU_GRADES)}")
+
+    def simulate(self, band: tuple[float, float], walks: int, seed: int) -> list[WalkStats]:
+        """``walks`` simulated walks at the band's speeds; walk i draws from
+        ``default_rng([seed, i])``."""
+        lo, hi = band
+        speeds = (lo, min(hi, SIM_TOP_SPEED_MPS))
+        rngs = [np.random.default_rng([seed, i]) for i in range(walks)]
+        routes = []
+        for rng in rngs:
+            motion = None if self.stance is None else self.stance.draw(rng)
+            cfg = SpeedRouteConfig(
+                speed_mps=speeds, duration_s=SIM_DURATION_S, stance_motion=motion
+            )
+            routes.append(speed_route(rng, cfg))
+        truth = simulate_foot(routes, FootSimConfig(rate_hz=SIM_RATE_HZ), full_state=False)
+        spec = IMU_GRADES[self.imu_grade]()
+        imu = simulate_imu(
+            truth.omega_b, truth.f_b, SIM_RATE_HZ, spec, rngs, gait_step_index=truth.gait_step
+        )
+        return [
+            walk_stats(samples_from_simulation(truth, imu, i, f"{self.name}{i}"))
+            for i in range(walks)
+        ]
+
+
+@dataclass(frozen=True)
+class BandComparison:
+    """One speed band: recordings, simulated envelope, coverage, distance."""
+
+    band: tuple[float, float]
+    real: list[WalkStats]
+    sim: list[WalkStats]
+
+    def _q(self, attr: str) -> tuple[float, float]:
+        values = [getattr(s, attr) for s in self.sim]
+        lo, hi = np.percentile(values, ENVELOPE_PERCENT)
+        return float(lo), float(hi)
+
+    @property
+    def p10_envelope(self) -> tuple[float, float]:
+        return self._q("log_shoe_p10")
+
+    @property
+    def p50_envelope(self) -> tuple[float, float]:
+        return self._q("log_shoe_p50")
+
+    def covered(self, stats: WalkStats) -> bool:
+        (a, b), (c, d) = self.p10_envelope, self.p50_envelope
+        return a <= stats.log_shoe_p10 <= b and c <= stats.log_shoe_p50 <= d
+
+    def excess_width(self) -> float | None:
+        """Largest envelope width minus real spread (decades), None without recordings."""
+        if not self.real:
+            return None
+        out = -math.inf
+        for attr, env in (("log_shoe_p10", self.p10_envelope), ("log_shoe_p50", self.p50_envelope)):
+            values = [getattr(s, attr) for s in self.real]
+            out = max(out, (env[1] - env[0]) - (max(values) - min(values)))
+        return float(out)
+
+    def distance(self) -> float | None:
+        """W1 between pooled log10 SHOE of recordings and simulated walks (decades)."""
+        if not self.real:
+            return None
+        real = np.concatenate([s.log_shoe for s in self.real])
+        sim = np.concatenate([s.log_shoe for s in self.sim])
+        return float(wasserstein_distance(real, sim))
+
+    def to_json(self) -> dict[str, Any]:
+        r3 = lambda x: None if x is None else round(float(x), 3)  # noqa: E731
+        return {
+            "band_mps": band_label(self.band),
+            "recordings": [{**s.summary(), "covered": self.covered(s)} for s in self.real],
+            "sim_walks": len(self.sim),
+            "sim_p10_envelope": [r3(x) for x in self.p10_envelope],
+            "sim_p50_envelope": [r3(x) for x in self.p50_envelope],
+            "sim_stance_s_median": r3(_median_of(self.sim, "stance_s")),
+            "real_stance_s_median": r3(_median_of(self.real, "stance_s")),
+            "envelope_excess_decades": r3(self.excess_width()),
+            "wasserstein_log_shoe": r3(self.distance()),
+        }
+
+
+def _median_of(stats: Sequence[WalkStats], stride_attr: str) -> float | None:
+    values = np.concatenate([getattr(s.strides, stride_attr) for s in stats]) if stats else []
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values)]
+    return float(np.median(values)) if values.size else None
+
+
+@dataclass(frozen=True)
+class Sim2RealReport:
+    """The comparison over all bands, and the recordings left out (no speed)."""
+
+    model: str
+    bands: list[BandComparison]
+    unbanded: list[WalkStats] = field(default_factory=list)
+
+    @property
+    def coverage(self) -> tuple[int, int]:
+        """(covered, total) recordings with a band."""
+        pairs = [(b.covered(s), 1) for b in self.bands for s in b.real]
+        return sum(c for c, _ in pairs), len(pairs)
+
+    def to_json(self) -> dict[str, Any]:
+        covered, total = self.coverage
+        excess = [b.excess_width() for b in self.bands if b.real]
+        return {
+            "model": self.model,
+            "covered": covered,
+            "recordings": total,
+            "coverage_fraction": round(covered / total, 4) if total else None,
+            "max_envelope_excess_decades": round(max(excess), 3) if excess else None,
+            "bands": [b.to_json() for b in self.bands],
+            "unbanded": [s.summary() for s in self.unbanded],
+        }
+
+    def format_text(self) -> str:
+        lines = [f"simulator model: {self.model}"]
+        lines.append(
+            "band (m/s)  rec  p10 real          p10 sim 5-95%    "
+            "p50 real          p50 sim 5-95%    covered  excess  W1"
+        )
+        for b in self.bands:
+            real10 = [s.log_shoe_p10 for s in b.real]
+            real50 = [s.log_shoe_p50 for s in b.real]
+            span = lambda v: f"{min(v):5.2f}-{max(v):5.2f}" if v else "    -      "  # noqa: E731
+            e10, e50 = b.p10_envelope, b.p50_envelope
+            cov = sum(b.covered(s) for s in b.real)
+            ex, w = b.excess_width(), b.distance()
+            lines.append(
+                f"{band_label(b.band):10s}  {len(b.real):3d}  {span(real10):16s}  "
+                f"{e10[0]:5.2f}-{e10[1]:5.2f}      {span(real50):16s}  {e50[0]:5.2f}-{e50[1]:5.2f}"
+                f"      {cov:2d}/{len(b.real):<2d}   "
+                f"{'  -  ' if ex is None else f'{ex:+5.2f}'}  {'  -' if w is None else f'{w:.2f}'}"
+            )
+        covered, total = self.coverage
+        if total:
+            lines.append(f"covered: {covered}/{total} recordings ({100 * covered / total:.0f} %)")
+        for s in self.unbanded:
+            lines.append(f"{s.name}: no walking speed in a band (speed source {s.speed_source})")
+        return "\n".join(lines)
+
+
+def compare(
+    real: Sequence[WalkStats], model: SimModel, walks_per_band: int = 20, seed: int = 0
+) -> Sim2RealReport:
+    """Recordings beside ``walks_per_band`` simulated walks per band (module docstring).
+
+    Every band is simulated, with recordings or not; band k's walks use seed
+    ``[seed, k]`` streams, so bands and models are comparable run to run.
+    """
+    if walks_per_band < 2:
+        raise ValueError(f"walks_per_band must be ≥ 2, got {walks_per_band}")
+    by_band: dict[tuple[float, float], list[WalkStats]] = {b: [] for b in SPEED_BANDS}
+    unbanded = []
+    for s in real:
+        band = band_of(s.speed_mps)
+        (unbanded if band is None else by_band[band]).append(s)
+    bands = [
+        BandComparison(b, by_band[b], model.simulate(b, walks_per_band, seed * 100 + k))
+        for k, b in enumerate(SPEED_BANDS)
+    ]
+    return Sim2RealReport(model.name, bands, unbanded)
+
+
+#: Named simulator models: today's (ADIS16470-like grade, realistic stance terms)
+#: and the one calibrated to the development recordings.
+MODELS = {
+    "today": SimModel("today", "adis16470"),
+    "calibrated": SimModel("calibrated", "microstrain_gx5", StanceRandomization.calibrated()),
+}

@@ -1,0 +1,352 @@
+"""Summary statistics of a foot-IMU walk, recorded or simulated.
+
+What the simulator is compared on (docs/SIM_TO_REAL.md):
+
+- the **label-free quietness measure**: over the walking part of a walk
+  (stands longer than :data:`STAND_MIN_S` removed), the 10th and 50th
+  percentiles of log10 of the SHOE statistic (Skog et al. 2010, eq 11;
+  :func:`pednav_env.nav.detectors.shoe_statistic`) with PyShoe's settings: a
+  window of 5 samples at 200 Hz, σ_a = 0.00098 m/s², σ_ω = 8.7266e-5 rad/s.
+  p10 measures how quiet mid-stance is; p50 sits at the stance/swing edge;
+- the **walking speed**: horizontal path length over the time not spent
+  standing (truth positions), or the footprint path length over the walking
+  time between the first and the last footprint;
+- **per stride**: speed, stance duration, and the medians of |ω| (rad/s) and
+  ||f| − g| (m/s²) in stance and in swing.
+
+Stance comes, in this order of preference, from labels stored with the walk
+(PyShoe's ``zv_vicon_opt``, the simulator's truth), from the truth velocity
+(|v| below :data:`TRUTH_STANCE_SPEED_MPS`), or from the SHOE detector
+(:data:`DETECTOR_STAND_LOG10` for stands; inside the walking part, the
+midpoint in log between the walk's own p10 and p50). :class:`WalkStats`
+records which (``stance_source``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from pednav_env.constants import STANDARD_GRAVITY
+from pednav_env.nav.detectors import ShoeDetectorConfig, shoe_statistic
+
+Array = NDArray[np.float64]
+Flags = NDArray[np.bool_]
+
+#: PyShoe's SHOE noise σ's (m/s², rad/s) and window (5 samples at 200 Hz).
+SHOE_ACCEL_SIGMA = 0.00098
+SHOE_GYRO_SIGMA = 8.7266e-5
+SHOE_WINDOW_S = 5 / 200.0
+#: A stance run at least this long (s) is a stand, removed from the walking part.
+STAND_MIN_S = 1.0
+#: Truth-velocity stance: horizontal-and-vertical foot speed below this (m/s),
+#: the velocity by central differences smoothed over 0.05 s.
+TRUTH_STANCE_SPEED_MPS = 0.2
+#: Detector stands: log10 SHOE below this for at least STAND_MIN_S (a still
+#: foot reads 3.5–5 with a MicroStrain 3DM-GX5-25; walking p10 is ≥ 4.5).
+DETECTOR_STAND_LOG10 = 6.0
+#: Label cleaning for stance durations: gaps and runs shorter than this (s) are
+#: closed / dropped (PyShoe's VICON labels flicker at mid-stance edges).
+LABEL_MIN_RUN_S = 0.05
+
+
+class StanceSource(StrEnum):
+    """Where a walk's stance labels came from."""
+
+    LABELS = "labels"
+    TRUTH_VELOCITY = "truth_velocity"
+    DETECTOR = "detector"
+
+
+class SpeedSource(StrEnum):
+    """Where a walk's speeds came from."""
+
+    TRUTH = "truth"
+    FOOTPRINTS = "footprints"
+    NONE = "none"
+
+
+@dataclass(frozen=True)
+class WalkSamples:
+    """The samples a :func:`walk_stats` needs, from any source.
+
+    Parameters
+    ----------
+    omega_b, f_b : (T, 3) rad/s and m/s², any axes (the statistics use norms).
+    rate_hz : sample rate (Hz).
+    name : for messages and reports.
+    stance : (T,) bool labels or None.
+    truth_pos : (T, 3) m or None (NaN rows allowed: no reference there).
+    footfall_index : (K,) sample index of each footprint, increasing, or None.
+    footprints_m : (K, 2) footprint positions (m) or None.
+    g : gravity (m/s²) for ||f| − g| and the SHOE statistic.
+    """
+
+    omega_b: Array
+    f_b: Array
+    rate_hz: float
+    name: str = "walk"
+    stance: Flags | None = None
+    truth_pos: Array | None = None
+    footfall_index: NDArray[np.int64] | None = None
+    footprints_m: Array | None = None
+    g: float = STANDARD_GRAVITY
+
+    def __post_init__(self) -> None:
+        w = np.asarray(self.omega_b, dtype=float)
+        f = np.asarray(self.f_b, dtype=float)
+        if w.ndim != 2 or w.shape[1] != 3 or w.shape != f.shape or w.shape[0] < 2:
+            raise ValueError(
+                f"{self.name}: omega_b and f_b must both be (T, 3) with T ≥ 2, "
+                f"got {w.shape} and {f.shape}"
+            )
+        if not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
+            raise ValueError(f"{self.name}: rate_hz must be > 0, got {self.rate_hz!r}")
+        n = w.shape[0]
+        if self.stance is not None and np.shape(self.stance) != (n,):
+            raise ValueError(f"{self.name}: stance must be ({n},), got {np.shape(self.stance)}")
+        if self.truth_pos is not None and np.shape(self.truth_pos) != (n, 3):
+            raise ValueError(
+                f"{self.name}: truth_pos must be ({n}, 3), got {np.shape(self.truth_pos)}"
+            )
+        if (self.footfall_index is None) != (self.footprints_m is None):
+            raise ValueError(f"{self.name}: footfall_index and footprints_m go together")
+        if self.footfall_index is not None:
+            idx = np.asarray(self.footfall_index)
+            if np.shape(self.footprints_m) != (idx.size, 2):
+                raise ValueError(
+                    f"{self.name}: footprints_m must be ({idx.size}, 2), "
+                    f"got {np.shape(self.footprints_m)}"
+                )
+            if idx.size and (idx.min() < 0 or idx.max() >= n or np.any(np.diff(idx) <= 0)):
+                raise ValueError(
+                    f"{self.name}: footfall_index must increase strictly within [0, {n})"
+                )
+        object.__setattr__(self, "omega_b", w)
+        object.__setattr__(self, "f_b", f)
+
+
+@dataclass(frozen=True)
+class StrideStats:
+    """Per-stride arrays, one entry per stride (strides overlapping a stand dropped).
+
+    A stride runs from one stance start (or footprint) to the next.
+    ``speed_mps`` is NaN without truth or footprints; ``stance_s`` is the
+    first stance run starting in the stride; the medians are over the
+    stride's stance and swing samples (NaN if there are none).
+    """
+
+    start_s: Array
+    duration_s: Array
+    speed_mps: Array
+    stance_s: Array
+    stance_gyro_median: Array  # |ω|, rad/s
+    stance_accel_dev_median: Array  # ||f| − g|, m/s²
+    swing_gyro_median: Array
+    swing_accel_dev_median: Array
+
+    @property
+    def count(self) -> int:
+        return int(self.start_s.size)
+
+
+@dataclass(frozen=True)
+class WalkStats:
+    """Statistics of one walk (module docstring)."""
+
+    name: str
+    rate_hz: float
+    stance_source: StanceSource
+    speed_source: SpeedSource
+    speed_mps: float  # NaN without truth or footprints
+    walking_s: float
+    standing_s: float
+    log_shoe: Array  # log10 SHOE over the walking part
+    strides: StrideStats
+
+    @property
+    def log_shoe_p10(self) -> float:
+        return float(np.percentile(self.log_shoe, 10)) if self.log_shoe.size else float("nan")
+
+    @property
+    def log_shoe_p50(self) -> float:
+        return float(np.percentile(self.log_shoe, 50)) if self.log_shoe.size else float("nan")
+
+    def summary(self) -> dict[str, Any]:
+        """Scalars for JSON: the measure, the speeds and the stride medians."""
+        st = self.strides
+
+        def med(a: Array) -> float | None:
+            a = a[np.isfinite(a)]
+            return round(float(np.median(a)), 6) if a.size else None
+
+        return {
+            "name": self.name,
+            "stance_source": str(self.stance_source),
+            "speed_source": str(self.speed_source),
+            "speed_mps": None if np.isnan(self.speed_mps) else round(self.speed_mps, 4),
+            "walking_s": round(self.walking_s, 3),
+            "standing_s": round(self.standing_s, 3),
+            "log_shoe_p10": round(self.log_shoe_p10, 4),
+            "log_shoe_p50": round(self.log_shoe_p50, 4),
+            "strides": st.count,
+            "stride_speed_median_mps": med(st.speed_mps),
+            "stance_s_median": med(st.stance_s),
+            "stance_gyro_median_rad_s": med(st.stance_gyro_median),
+            "stance_accel_dev_median_m_s2": med(st.stance_accel_dev_median),
+            "swing_gyro_median_rad_s": med(st.swing_gyro_median),
+            "swing_accel_dev_median_m_s2": med(st.swing_accel_dev_median),
+        }
+
+
+def log10_shoe(omega_b: Array, f_b: Array, rate_hz: float, g: float = STANDARD_GRAVITY) -> Array:
+    """log10 of the SHOE statistic (T,) with PyShoe's σ's and window (module docstring)."""
+    cfg = ShoeDetectorConfig(
+        threshold=1.0,
+        window_s=SHOE_WINDOW_S,
+        accel_noise_std=SHOE_ACCEL_SIGMA,
+        gyro_noise_std=SHOE_GYRO_SIGMA,
+        g=g,
+    )
+    t = shoe_statistic(np.asarray(omega_b)[None], np.asarray(f_b)[None], cfg, rate_hz)[0]
+    return np.log10(np.maximum(t, 1e-300))
+
+
+def runs(flags: Flags) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Start and end (exclusive) indices of the runs of True in ``flags``."""
+    d = np.diff(np.concatenate(([0], np.asarray(flags, dtype=np.int8), [0])))
+    return np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+
+
+def long_runs(flags: Flags, min_samples: int) -> Flags:
+    """The runs of True in ``flags`` of at least ``min_samples`` samples."""
+    out = np.zeros(len(flags), dtype=bool)
+    for a, b in zip(*runs(flags), strict=True):
+        if b - a >= min_samples:
+            out[a:b] = True
+    return out
+
+
+def clean_labels(flags: Flags, min_samples: int) -> Flags:
+    """Close gaps shorter than ``min_samples`` between True runs, then drop runs
+    shorter than ``min_samples``."""
+    out = np.asarray(flags, dtype=bool).copy()
+    starts, ends = runs(out)
+    for e, s in zip(ends[:-1], starts[1:], strict=True):
+        if s - e < min_samples:
+            out[e:s] = True
+    return long_runs(out, min_samples)
+
+
+def truth_velocity_stance(truth_pos: Array, rate_hz: float) -> Flags:
+    """Stance where the smoothed truth speed is below :data:`TRUTH_STANCE_SPEED_MPS`
+    (samples without a reference are not stance)."""
+    pos = np.asarray(truth_pos, dtype=float)
+    vel = np.gradient(pos, 1.0 / rate_hz, axis=0)
+    n = max(1, int(round(0.05 * rate_hz)))
+    speed = np.linalg.norm(vel, axis=1)
+    ok = np.isfinite(speed)
+    smooth = np.convolve(np.where(ok, speed, np.inf), np.ones(n) / n, mode="same")
+    return ok & (smooth < TRUTH_STANCE_SPEED_MPS)
+
+
+def _path_length(pos: Array, mask: Flags) -> float:
+    """Horizontal path length over the steps k → k+1 with both samples in ``mask``."""
+    step = np.linalg.norm(np.diff(pos[:, :2], axis=0), axis=1)
+    keep = mask[1:] & mask[:-1] & np.isfinite(step)
+    return float(step[keep].sum())
+
+
+def _median(x: Array) -> float:
+    return float(np.median(x)) if x.size else float("nan")
+
+
+def walk_stats(samples: WalkSamples) -> WalkStats:
+    """The statistics of one walk (module docstring)."""
+    s = samples
+    rate = float(s.rate_hz)
+    log_t = log10_shoe(s.omega_b, s.f_b, rate, s.g)
+    stand_min = max(1, int(round(STAND_MIN_S * rate)))
+    if s.stance is not None:
+        source, stance = StanceSource.LABELS, np.asarray(s.stance, dtype=bool)
+    elif s.truth_pos is not None and np.isfinite(s.truth_pos).all(axis=1).mean() > 0.9:
+        source, stance = StanceSource.TRUTH_VELOCITY, truth_velocity_stance(s.truth_pos, rate)
+    else:
+        source, stance = StanceSource.DETECTOR, log_t < DETECTOR_STAND_LOG10
+    stand = long_runs(stance, stand_min)
+    walking = ~stand
+    if source is StanceSource.DETECTOR and walking.any():
+        mid = 0.5 * (np.percentile(log_t[walking], 10) + np.percentile(log_t[walking], 50))
+        stance = stand | (log_t < mid)
+    if s.footfall_index is not None and len(s.footfall_index) >= 2:
+        idx = np.asarray(s.footfall_index, dtype=np.int64)
+        walking[: idx[0]] = False  # the walk is between the first and last footprint
+        walking[idx[-1] + 1 :] = False
+    walking_s = float(walking.sum()) / rate
+    speed_source, speed = SpeedSource.NONE, float("nan")
+    if s.footfall_index is not None and len(s.footfall_index) >= 2 and walking_s > 0:
+        fp = np.asarray(s.footprints_m, dtype=float)
+        speed_source = SpeedSource.FOOTPRINTS
+        speed = float(np.linalg.norm(np.diff(fp, axis=0), axis=1).sum()) / walking_s
+    elif s.truth_pos is not None and walking_s > 0:
+        speed_source = SpeedSource.TRUTH
+        speed = _path_length(np.asarray(s.truth_pos, dtype=float), walking) / walking_s
+    strides = _stride_stats(s, stance, stand, rate)
+    return WalkStats(
+        name=s.name,
+        rate_hz=rate,
+        stance_source=source,
+        speed_source=speed_source,
+        speed_mps=speed,
+        walking_s=walking_s,
+        standing_s=float(stand.sum()) / rate,
+        log_shoe=log_t[walking],
+        strides=strides,
+    )
+
+
+def _stride_stats(s: WalkSamples, stance: Flags, stand: Flags, rate: float) -> StrideStats:
+    """Per-stride statistics; strides from footprints or from clean stance starts."""
+    n = stance.size
+    clean = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
+    starts, ends = runs(clean)
+    if s.footfall_index is not None:
+        bounds = np.asarray(s.footfall_index, dtype=np.int64)
+        points = np.asarray(s.footprints_m, dtype=float)
+    else:
+        bounds = starts
+        points = None
+        if s.truth_pos is not None:
+            points = np.asarray(s.truth_pos, dtype=float)[bounds, :2]
+    gyro = np.linalg.norm(s.omega_b, axis=1)
+    accel_dev = np.abs(np.linalg.norm(s.f_b, axis=1) - s.g)
+    rows = []
+    for k in range(bounds.size - 1):
+        a, b = int(bounds[k]), int(bounds[k + 1])
+        if b <= a or stand[a:b].any() or b > n:
+            continue
+        speed = float("nan")
+        if points is not None:
+            d = np.linalg.norm(points[k + 1, :2] - points[k, :2])
+            speed = float(d) * rate / (b - a) if np.isfinite(d) else float("nan")
+        first = np.flatnonzero((starts >= a) & (starts < b))
+        stance_s = float(ends[first[0]] - starts[first[0]]) / rate if first.size else float("nan")
+        st = clean[a:b]
+        rows.append(
+            (
+                a / rate,
+                (b - a) / rate,
+                speed,
+                stance_s,
+                _median(gyro[a:b][st]),
+                _median(accel_dev[a:b][st]),
+                _median(gyro[a:b][~st]),
+                _median(accel_dev[a:b][~st]),
+            )
+        )
+    cols = np.array(rows, dtype=float).reshape(-1, 8).T
+    return StrideStats(*cols)

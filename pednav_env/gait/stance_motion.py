@@ -1,0 +1,197 @@
+"""Calibrated stance dynamics of the foot: quiet mid-stance, loud edges, roll-over.
+
+An alternative to the ``realistic`` stance terms of :mod:`pednav_env.gait.foot`
+(whose micro-motion, A_mm sin²(πs), is loudest at mid-stance, where recorded
+feet are quietest; docs/SIM_TO_REAL.md). Over each moving stance
+[t_s, t_e] (d = t_e − t_s), on the foot's pitch θ and roll γ:
+
+- micro-motion ``env(t) sin(ω (t − t_s))`` with ω = 2π·(7, 10 Hz) for pitch
+  and roll and the envelope
+
+      env(t) = Q + E (exp(−(t − t_s)/τ_hs) + exp(−(t_e − t)/τ_ho)),
+
+  a floor Q (mid-stance quietness) and two edges: the settling after heel
+  strike (τ_hs) and the loading before heel-off (τ_ho). The oscillation
+  starts at zero at t_s (the strike excites it); at t_e it leaves an offset
+  of at most env·1 rad (a few mrad), which the swing spline does not see;
+- roll-over into heel-off: a pitch bump A_r sin²(π u) over the last fraction
+  ρ of the stance, u = (t − (t_e − ρ d))/(ρ d).
+
+Amplitudes scale with the stride speed v (m/s): Q = Q₁ v^p_q, E = E₁ v^p_e,
+A_r = A₁ v^p_r. One :class:`StanceMotion` per walk (the walker's values; see
+:mod:`pednav_env.gait.stance_randomization` for the distribution over
+walkers); each stance multiplies Q and E by 10^(σ_s ξ), ξ standard normal
+drawn from ``seed`` (stance-to-stance variation).
+
+These functions are compiled into :mod:`pednav_env.gait.foot_kernels`, whose
+numba cache checks that module's file only: after editing this one, delete
+``pednav_env/gait/__pycache__/foot_kernels.*.nb[ic]``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+Array = NDArray[np.float64]
+
+#: Micro-motion angular frequencies 2π·(7, 10 Hz) of pitch and roll.
+MICRO_W = (2 * math.pi * 7.0, 2 * math.pi * 10.0)
+#: Columns of the per-stance parameter table (:func:`stance_table`).
+COLUMNS = ("quiet_rad", "edge_rad", "tau_hs_s", "tau_ho_s", "roll_rad", "roll_fraction")
+
+
+@dataclass(frozen=True)
+class StanceMotion:
+    """One walker's stance dynamics (module docstring); angles in rad at 1 m/s."""
+
+    quiet_rad: float = 1e-3
+    quiet_speed_exponent: float = 0.5
+    edge_rad: float = 1e-2
+    edge_speed_exponent: float = 1.0
+    tau_hs_s: float = 0.04
+    tau_ho_s: float = 0.04
+    roll_rad: float = 0.01
+    roll_speed_exponent: float = 2.0
+    roll_fraction: float = 0.3
+    stance_spread_log10: float = 0.2
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("quiet_rad", "edge_rad", "roll_rad", "stance_spread_log10"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and 0 <= v < 1.0):
+                raise ValueError(f"StanceMotion.{name} must be in [0, 1), got {v!r}")
+        for name in ("tau_hs_s", "tau_ho_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and 0 < v <= 1.0):
+                raise ValueError(f"StanceMotion.{name} must be in (0, 1] s, got {v!r}")
+        if not (0 < self.roll_fraction <= 1):
+            raise ValueError(
+                f"StanceMotion.roll_fraction must be in (0, 1], got {self.roll_fraction!r}"
+            )
+        for name in ("quiet_speed_exponent", "edge_speed_exponent", "roll_speed_exponent"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and -4 <= v <= 4):
+                raise ValueError(f"StanceMotion.{name} must be in [−4, 4], got {v!r}")
+
+
+def stance_table(motion: StanceMotion, speed_mps: Array) -> Array:
+    """Per-stance parameters (K, 6) in :data:`COLUMNS` order for stances walked at
+    ``speed_mps`` (K,)."""
+    v = np.maximum(np.asarray(speed_mps, dtype=float), 1e-3)
+    jitter = 10.0 ** (
+        motion.stance_spread_log10 * np.random.default_rng(motion.seed).standard_normal(v.size)
+    )
+    table = np.empty((v.size, len(COLUMNS)))
+    table[:, 0] = motion.quiet_rad * v**motion.quiet_speed_exponent * jitter
+    table[:, 1] = motion.edge_rad * v**motion.edge_speed_exponent * jitter
+    table[:, 2] = motion.tau_hs_s
+    table[:, 3] = motion.tau_ho_s
+    table[:, 4] = motion.roll_rad * v**motion.roll_speed_exponent
+    table[:, 5] = motion.roll_fraction
+    return table
+
+
+@njit(cache=True)
+def _oscillation(
+    n_values: int, w: float, x: float, env: float, env1: float, env2: float
+) -> tuple[float, float, float]:
+    """env(t) sin(w x), x = t − t_s, and its first two time derivatives."""
+    sn, cs = math.sin(w * x), math.cos(w * x)
+    v = a = 0.0
+    if n_values > 1:
+        v = env1 * sn + env * w * cs
+    if n_values > 2:
+        a = env2 * sn + 2.0 * env1 * w * cs - env * w * w * sn
+    return env * sn, v, a
+
+
+@njit(cache=True)
+def stance_motion(
+    n_values: int, t: float, start: float, end: float, par: NDArray[np.float64]
+) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """Pitch and roll offsets at ``t`` in the stance [start, end) and their first two
+    time derivatives (0 beyond ``n_values``), parameters ``par`` (:data:`COLUMNS`)."""
+    quiet, edge, tau1, tau2, roll, frac = par[0], par[1], par[2], par[3], par[4], par[5]
+    e1 = math.exp(-(t - start) / tau1)
+    e2 = math.exp(-(end - t) / tau2)
+    env = quiet + edge * (e1 + e2)
+    env1 = edge * (e2 / tau2 - e1 / tau1)
+    env2 = edge * (e1 / (tau1 * tau1) + e2 / (tau2 * tau2))
+    x = t - start
+    p0, p1, p2 = _oscillation(n_values, MICRO_W[0], x, env, env1, env2)
+    roll_motion = _oscillation(n_values, MICRO_W[1], x, env, env1, env2)
+    width = frac * (end - start)
+    u = (t - (end - width)) / width
+    if u > 0.0:
+        s1 = math.sin(math.pi * u)
+        p0 += roll * s1 * s1
+        p1 += roll * math.pi / width * math.sin(2 * math.pi * u)
+        p2 += roll * 2 * math.pi * math.pi / (width * width) * math.cos(2 * math.pi * u)
+    return (p0, p1, p2), roll_motion
+
+
+@dataclass(frozen=True)
+class StanceRandomization:
+    """Walker-to-walker and day-to-day variability of :class:`StanceMotion`
+    (domain randomisation): log10 of the quiet and edge amplitudes normal
+    with the given means and standard deviations, the other values fixed.
+
+    The defaults are today's guess; :meth:`calibrated` holds the values fitted
+    to recorded walks (docs/SIM_TO_REAL.md, ``benchmarks/calibrate_foot.py``).
+    """
+
+    quiet_log10_mean: float = -3.0
+    quiet_log10_std: float = 0.3
+    quiet_speed_exponent: float = 0.5
+    edge_log10_mean: float = -2.0
+    edge_log10_std: float = 0.2
+    edge_speed_exponent: float = 1.0
+    tau_hs_s: float = 0.04
+    tau_ho_s: float = 0.04
+    roll_rad: float = 0.01
+    roll_speed_exponent: float = 1.0
+    roll_fraction: float = 0.3
+    stance_spread_log10: float = 0.2
+
+    def __post_init__(self) -> None:
+        for name in ("quiet_log10_std", "edge_log10_std"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and 0 <= v <= 2):
+                raise ValueError(f"StanceRandomization.{name} must be in [0, 2], got {v!r}")
+        for name in ("quiet_log10_mean", "edge_log10_mean"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and -7 <= v <= -0.5):
+                raise ValueError(f"StanceRandomization.{name} must be in [−7, −0.5], got {v!r}")
+        # the remaining values are checked by StanceMotion at each draw
+        self.draw(np.random.default_rng(0))
+
+    @classmethod
+    def calibrated(cls) -> StanceRandomization:
+        """The values fitted to the development recordings (CMA-ES,
+        ``benchmarks/calibrate_foot.py``; docs/SIM_TO_REAL.md)."""
+        return cls()
+
+    def draw(self, rng: np.random.Generator) -> StanceMotion:
+        """One walker's stance dynamics: two normal draws and a seed from ``rng``."""
+        z_quiet, z_edge = rng.standard_normal(2)
+        quiet = self.quiet_log10_mean + self.quiet_log10_std * z_quiet
+        edge = self.edge_log10_mean + self.edge_log10_std * z_edge
+        return StanceMotion(
+            quiet_rad=float(min(10.0**quiet, 0.5)),
+            quiet_speed_exponent=self.quiet_speed_exponent,
+            edge_rad=float(min(10.0**edge, 0.5)),
+            edge_speed_exponent=self.edge_speed_exponent,
+            tau_hs_s=self.tau_hs_s,
+            tau_ho_s=self.tau_ho_s,
+            roll_rad=self.roll_rad,
+            roll_speed_exponent=self.roll_speed_exponent,
+            roll_fraction=self.roll_fraction,
+            stance_spread_log10=self.stance_spread_log10,
+            seed=int(rng.integers(2**31)),
+        )

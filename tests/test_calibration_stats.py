@@ -1,0 +1,153 @@
+"""Walk statistics (pednav_env.calibration.stats) against hand-computed walks."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pednav_env.calibration.sources import load_walk
+from pednav_env.calibration.stats import (
+    SHOE_ACCEL_SIGMA,
+    SHOE_GYRO_SIGMA,
+    SpeedSource,
+    StanceSource,
+    WalkSamples,
+    clean_labels,
+    log10_shoe,
+    walk_stats,
+)
+from pednav_env.constants import STANDARD_GRAVITY
+
+RATE = 200.0
+STAND, SWING, STANCE, STRIDES = 400, 120, 80, 5
+W_STANCE, W_SWING, W_STAND = 0.1, 3.0, 0.001  # |ω| (rad/s) in each phase
+PYSHOE_SAMPLE = Path(__file__).parent / "data" / "replay" / "pyshoe_2017-11-22-11-48-35_first7s.mat"
+
+
+def _hand_walk() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A 2 s stand, 5 strides (0.6 s swing moving 1 m along x, 0.4 s stance), the last
+    stance running into a 2 s stand. |f| = g throughout; ω about x."""
+    phases = [(STAND, W_STAND, True, 0.0)]
+    for _ in range(STRIDES):
+        phases += [(SWING, W_SWING, False, 1.0), (STANCE, W_STANCE, True, 0.0)]
+    phases.append((STAND, W_STAND, True, 0.0))
+    omega, stance, x = [], [], [0.0]
+    for n, w, st, dist in phases:
+        omega += [w] * n
+        stance += [st] * n
+        x += list(x[-1] + dist * np.arange(1, n + 1) / n)
+    omega_b = np.zeros((len(omega), 3))
+    omega_b[:, 0] = omega
+    f_b = np.tile([0.0, 0.0, STANDARD_GRAVITY], (len(omega), 1))
+    pos = np.zeros((len(omega), 3))
+    pos[:, 0] = x[:-1]
+    return omega_b, f_b, np.array(stance), pos
+
+
+def test_log10_shoe_of_a_constant_rotation_is_the_gyro_term() -> None:
+    # SHOE = (1/W) Σ |f − g f̄/|f̄||²/σ_a² + |ω|²/σ_ω²; f = (0, 0, g) makes the first
+    # term 0, so log10 SHOE = 2 log10(|ω|/σ_ω) once the window is full.
+    omega = np.tile([0.0, 0.3, 0.4], (20, 1))  # |ω| = 0.5
+    f = np.tile([0.0, 0.0, STANDARD_GRAVITY], (20, 1))
+    got = log10_shoe(omega, f, RATE)
+    assert got[5:] == pytest.approx(2 * math.log10(0.5 / SHOE_GYRO_SIGMA), abs=1e-9)
+
+
+def test_log10_shoe_accel_term_uses_pyshoe_sigma() -> None:
+    # f alternating between (0, 0, g ± a): the window mean points along z, so the
+    # reference g f̄/|f̄| is (0, 0, g) and every sample is off by a: a²/σ_a² (ω = 0).
+    a = 0.05
+    f = np.zeros((40, 3))
+    f[:, 2] = STANDARD_GRAVITY + a * np.where(np.arange(40) % 2 == 0, 1.0, -1.0)
+    got = log10_shoe(np.zeros((40, 3)), f, RATE)
+    # (a deviation from the window mean instead would give a²(1 − 1/25): 0.018
+    # decades lower); 1e-9 is float round-off
+    expected = math.log10(a * a / SHOE_ACCEL_SIGMA**2)
+    assert got[10:] == pytest.approx(expected, abs=1e-9)
+
+
+def test_walk_stats_from_labels_hand_computed() -> None:
+    omega_b, f_b, stance, pos = _hand_walk()
+    s = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos))
+    assert s.stance_source is StanceSource.LABELS
+    assert s.speed_source is SpeedSource.TRUTH
+    # stands: the first 2 s and the last stance + 2 s; walking 5 swings + 4 stances
+    walking = STRIDES * SWING + (STRIDES - 1) * STANCE
+    assert s.walking_s == pytest.approx(walking / RATE)
+    assert s.standing_s == pytest.approx((2 * STAND + STANCE) / RATE)
+    # 5 m in the walking part (the first step out of the stand is a stand step: the
+    # path counts steps with both samples walking, 1 swing step of 1/120 m less)
+    assert s.speed_mps == pytest.approx((STRIDES - 1 / SWING) / (walking / RATE))
+    # p10: 304 pure-stance samples (4 per stance mix swing into the window) of 920
+    assert s.log_shoe_p10 == pytest.approx(2 * math.log10(W_STANCE / SHOE_GYRO_SIGMA), abs=1e-9)
+    # p50: beyond the 336 stance and mixed samples, a pure swing sample
+    assert s.log_shoe_p50 == pytest.approx(2 * math.log10(W_SWING / SHOE_GYRO_SIGMA), abs=1e-9)
+    st = s.strides
+    # strides between stance starts; the one leaving the first stand is dropped
+    assert st.count == STRIDES - 1
+    assert st.duration_s == pytest.approx(np.full(4, (SWING + STANCE) / RATE))
+    assert st.speed_mps == pytest.approx(np.full(4, 1.0 / ((SWING + STANCE) / RATE)))
+    assert st.stance_s[:3] == pytest.approx(np.full(3, STANCE / RATE))
+    assert st.stance_gyro_median == pytest.approx(np.full(4, W_STANCE))
+    assert st.swing_gyro_median == pytest.approx(np.full(4, W_SWING))
+    assert st.stance_accel_dev_median == pytest.approx(np.zeros(4), abs=1e-12)
+
+
+def test_walk_stats_from_truth_velocity_without_labels() -> None:
+    omega_b, f_b, _, pos = _hand_walk()
+    s = walk_stats(WalkSamples(omega_b, f_b, RATE, truth_pos=pos))
+    assert s.stance_source is StanceSource.TRUTH_VELOCITY
+    # the 0.05 s speed smoothing moves each stand edge by up to 5 samples
+    assert s.standing_s == pytest.approx((2 * STAND + STANCE) / RATE, abs=10 / RATE)
+
+
+def test_walk_stats_from_detector_and_footprints() -> None:
+    omega_b, f_b, _, _ = _hand_walk()
+    starts = STAND + SWING + np.arange(STRIDES) * (SWING + STANCE)  # footfalls
+    footprints = np.stack([np.arange(1, STRIDES + 1.0), np.zeros(STRIDES)], axis=1)
+    s = walk_stats(WalkSamples(omega_b, f_b, RATE, footfall_index=starts, footprints_m=footprints))
+    assert s.stance_source is StanceSource.DETECTOR
+    assert s.speed_source is SpeedSource.FOOTPRINTS
+    # walking runs from the first to the last footprint: 4 strides of 1 s
+    assert s.walking_s == pytest.approx((starts[-1] - starts[0] + 1) / RATE)
+    assert s.speed_mps == pytest.approx((STRIDES - 1) / s.walking_s)
+    assert s.strides.speed_mps == pytest.approx(np.ones(STRIDES - 1))
+
+
+def test_clean_labels_closes_short_gaps_and_drops_short_runs() -> None:
+    flags = np.array([1, 1, 1, 0, 1, 1, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0], dtype=bool)
+    want = np.array([1, 1, 1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0], dtype=bool)
+    assert np.array_equal(clean_labels(flags, 2), want)
+
+
+def test_walk_samples_bad_input_names_the_problem() -> None:
+    with pytest.raises(ValueError, match="omega_b and f_b"):
+        WalkSamples(np.zeros((10, 3)), np.zeros((9, 3)), RATE, name="w")
+    with pytest.raises(ValueError, match="stance must be"):
+        WalkSamples(np.zeros((10, 3)), np.zeros((10, 3)), RATE, stance=np.zeros(9, bool))
+    with pytest.raises(ValueError, match="footfall_index must increase"):
+        WalkSamples(
+            np.zeros((10, 3)),
+            np.zeros((10, 3)),
+            RATE,
+            footfall_index=np.array([3, 2]),
+            footprints_m=np.zeros((2, 2)),
+        )
+
+
+def test_pyshoe_excerpt_uses_vicon_labels_and_truth() -> None:
+    s = walk_stats(load_walk(PYSHOE_SAMPLE))
+    assert s.stance_source is StanceSource.LABELS
+    assert s.speed_source is SpeedSource.TRUTH
+    assert s.walking_s > 0 and np.isfinite(s.speed_mps)
+    # a MicroStrain foot in walking: mid-stance 10^4.5–10^7.5, the stance/swing
+    # edge 10^6.5–10^9.5 (the development trials' ranges, docs/SIM_TO_REAL.md)
+    assert 4.5 < s.log_shoe_p10 < 7.5 and 6.5 < s.log_shoe_p50 < 9.5
+
+
+def test_load_walk_missing_file() -> None:
+    with pytest.raises(ValueError, match="no such file"):
+        load_walk("/nonexistent/walk.mat")
