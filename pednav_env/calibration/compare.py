@@ -73,9 +73,15 @@ class SimModel:
         if self.imu_grade not in IMU_GRADES:
             raise ValueError(f"unknown IMU grade {self.imu_grade!r}; known: {sorted(IMU_GRADES)}")
 
-    def simulate(self, band: tuple[float, float], walks: int, seed: int) -> list[WalkStats]:
-        """``walks`` simulated walks at the band's speeds; walk i draws from
-        ``default_rng([seed, i])``."""
+    def simulate(
+        self,
+        band: tuple[float, float],
+        walks: int,
+        seed: int,
+        duration_s: tuple[float, float] = SIM_DURATION_S,
+    ) -> list[WalkStats]:
+        """``walks`` simulated walks at the band's speeds, ``duration_s`` long; walk i
+        draws from ``default_rng([seed, i])``."""
         lo, hi = band
         speeds = (lo, min(hi, SIM_TOP_SPEED_MPS))
         rngs = [np.random.default_rng([seed, i]) for i in range(walks)]

@@ -413,20 +413,27 @@ def gait_for_speed(speed_mps: float, run_from_mps: float = 2.0) -> Gait:
     return Gait.FAST_WALK if speed_mps < run_from_mps else Gait.RUN
 
 
+#: Bounds of the draws of :func:`_speed_stride_shape`: running without the length
+#: (the speed gives it), walking a cycle jitter then the shape noise.
+_RUN_BOUNDS = (np.array(_RUN_DRAWS)[1:, 0], np.array(_RUN_DRAWS)[1:, 1])
+_WALK_BOUNDS = (
+    np.array((0.93, *np.array(_WALK_DRAWS)[6:, 0])),
+    np.array((1.07, *np.array(_WALK_DRAWS)[6:, 1])),
+)
+
+
 def _speed_stride_shape(rng: np.random.Generator, speed: float, gait: Gait) -> StrideShape:
     """A realistic stride at ``speed`` m/s: cycle from the speed (SpeedRouteConfig),
     the other shape values drawn as in :func:`random_stride_shape`."""
     if gait is Gait.RUN:
         cycle, stance_frac, height, toe_off, heel_strike, pitch, roll = rng.uniform(
-            np.array(_RUN_DRAWS)[1:, 0], np.array(_RUN_DRAWS)[1:, 1]
+            *_RUN_BOUNDS
         ).tolist()
         t0, t1 = stance_frac * cycle, 0.10 * cycle
         t2, t3 = cycle - t0 - 2 * t1, t1
         heel_strike = -heel_strike
     else:
-        jitter, a, d_height, d_toe_off, pitch, roll = rng.uniform(
-            (0.93, *np.array(_WALK_DRAWS)[6:, 0]), (1.07, *np.array(_WALK_DRAWS)[6:, 1])
-        ).tolist()
+        jitter, a, d_height, d_toe_off, pitch, roll = rng.uniform(*_WALK_BOUNDS).tolist()
         cycle = jitter / (0.55 + 0.3 * speed)
         t0, t1, t2, t3 = a * cycle, (0.5 - a) * cycle, a * cycle, (0.5 - a) * cycle
         height = 0.06 + 0.04 * speed + d_height

@@ -173,9 +173,23 @@ class StanceRandomization:
 
     @classmethod
     def calibrated(cls) -> StanceRandomization:
-        """The values fitted to the development recordings (CMA-ES,
-        ``benchmarks/calibrate_foot.py``; docs/SIM_TO_REAL.md)."""
-        return cls()
+        """The values fitted to the 31 development recordings (CMA-ES, 10
+        generations of 8, ``benchmarks/calibrate_foot.py``; docs/SIM_TO_REAL.md),
+        rounded to 3 digits."""
+        return cls(
+            quiet_log10_mean=-3.18,
+            quiet_log10_std=0.314,
+            quiet_speed_exponent=0.575,
+            edge_log10_mean=-2.18,
+            edge_log10_std=0.2,
+            edge_speed_exponent=1.10,
+            tau_hs_s=0.0749,
+            tau_ho_s=0.131,
+            roll_rad=0.0514,
+            roll_speed_exponent=1.0,
+            roll_fraction=0.3,
+            stance_spread_log10=0.2,
+        )
 
     def draw(self, rng: np.random.Generator) -> StanceMotion:
         """One walker's stance dynamics: two normal draws and a seed from ``rng``."""
