@@ -12,9 +12,12 @@ Policies:
   interval are then replayed through the same filter to record the track
   sample by sample.
 
-JSON keys (docs/REAL_DATA.md): ``duration_s``, ``rate_hz``, ``distance_m``,
-``final_position_m``, ``stances``; with truth ``armse_m``,
-``armse_pyshoe_m``, ``final_error_m``; without truth ``loop_closure_m``.
+JSON keys (docs/REAL_DATA.md): ``duration_s``, ``rate_hz``,
+``navigation_start_s``, ``distance_m``, ``final_position_m``, ``stances``;
+with truth ``armse_m``, ``armse_pyshoe_m``, ``final_error_m``; with
+footprints ``footprints``, ``footprint_mean_error_m``,
+``footprint_final_error_m``, ``footprint_final_error_pct``; with neither
+``loop_closure_m``.
 """
 
 from __future__ import annotations
@@ -27,9 +30,25 @@ from typing import Any
 import numpy as np
 
 from pednav_env.io import LoadOptions, Recording, load_recording
-from pednav_env.replay.metrics import loop_closure, rotate_h, track_errors
+from pednav_env.replay.metrics import (
+    aligned_reference,
+    footprint_errors,
+    loop_closure,
+    rotate_h,
+    track_errors,
+)
 from pednav_env.replay.runner import RecordingRun, prepare, run_prepared
 from pednav_env.replay.setup import SETUP_NAMES, RealFilterSetup, named_setup
+
+#: Footprint keys of the JSON summary (:func:`pednav_env.replay.metrics.footprint_errors`).
+FOOTPRINT_KEYS = (
+    "footprints",
+    "footprint_mean_error_m",
+    "footprint_final_error_m",
+    "footprint_final_error_pct",
+)
+#: The default policy of ``pednav run``: the configuration chosen on real walks.
+DEFAULT_POLICY = "real-fixed"
 
 #: The simulated env whose policies (tuned, adaptive, pretrained) are used.
 SIM_ENV_ID = "pednav/FootZupt-v0"
@@ -79,6 +98,7 @@ def summarize(rec: Recording, run: RecordingRun) -> dict[str, Any]:
     out: dict[str, Any] = {
         "duration_s": round(rec.duration_s, 3),
         "rate_hz": round(prep.rate_hz, 3),
+        "navigation_start_s": round(prep.navigation_start_s, 3),
         "distance_m": float(np.sum(np.linalg.norm(d, axis=1))),
         "final_position_m": [float(x) for x in pos[-1]],
         "stances": int(run.stances[0]),
@@ -86,7 +106,10 @@ def summarize(rec: Recording, run: RecordingRun) -> dict[str, Any]:
     if rec.has_truth:
         m = track_errors(pos, prep.truth_pos, prep.n_align)
         out.update({k: m[k] for k in ("armse_m", "armse_pyshoe_m", "final_error_m")})
-    else:
+    if prep.footprints is not None:
+        m = footprint_errors(pos[prep.footprints.sample], prep.footprints.pos)
+        out.update({k: v for k, v in m.items() if k in FOOTPRINT_KEYS})
+    if not rec.has_truth and prep.footprints is None:
         out["loop_closure_m"] = loop_closure(pos, prep.n_align)
     return out
 
@@ -94,7 +117,7 @@ def summarize(rec: Recording, run: RecordingRun) -> dict[str, Any]:
 def run(
     path: str | Path,
     fmt: str = "auto",
-    policy: str = "paper",
+    policy: str = DEFAULT_POLICY,
     mounting: str | None = None,
     options: LoadOptions | None = None,
     plot: str | Path | None = None,
@@ -118,7 +141,9 @@ def run(
 
 
 def write_plot(rec: Recording, run: RecordingRun, path: Path, label: str) -> None:
-    """Top view of the estimated track (and the reference, turned as in the metrics)."""
+    """Top view of the estimated track with the truth, turned as in the metrics:
+    a dense reference as a line, a sparse one (few samples) as points, and
+    footprints as circles joined to the estimate at their footfalls."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -129,18 +154,34 @@ def write_plot(rec: Recording, run: RecordingRun, path: Path, label: str) -> Non
     pos = run.pos[0]
     fig, ax = plt.subplots(figsize=(6, 6), dpi=100)
     if rec.has_truth:
-        m = track_errors(pos, prep.truth_pos, na)
-        ref = prep.truth_pos[na:, :2] - prep.truth_pos[na, :2]
-        ref = rotate_h(ref, m["heading_offset_rad"])
-        ax.plot(ref[:, 0], ref[:, 1], "k-", lw=1, label="reference")
+        ref = aligned_reference(pos, prep.truth_pos, na)
+        ok = np.isfinite(ref).all(axis=1)
+        sparse = ok.mean() < 0.5
+        ax.plot(
+            ref[ok, 0],
+            ref[ok, 1],
+            "k.:" if sparse else "k-",
+            lw=1,
+            ms=4,
+            label=f"reference ({int(ok.sum())} samples)" if sparse else "reference",
+        )
+    if prep.footprints is not None:
+        fp = prep.footprints
+        est = pos[fp.sample, :2]
+        m = footprint_errors(est, fp.pos)
+        ref = est[0] + rotate_h(fp.pos - fp.pos[0], m["footprint_heading_offset_rad"])
+        ax.plot(ref[:, 0], ref[:, 1], "ko", mfc="none", ms=5, label=f"footprints ({fp.count})")
+        ax.plot(est[:, 0], est[:, 1], "r.", ms=4, label="estimate at the footfalls")
+        for a, b in zip(ref, est, strict=True):
+            ax.plot([a[0], b[0]], [a[1], b[1]], "-", color="0.6", lw=0.7)
     ax.plot(pos[na:, 0], pos[na:, 1], "r-", lw=1, label=f"ZUPT-UKF ({label})")
     st = run.stance[0] & ~np.roll(run.stance[0], 1)
     ax.plot(pos[st, 0], pos[st, 1], "b.", ms=3, label="stance starts")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title(rec.name)
-    ax.legend(loc="best")
+    ax.set_title(rec.name, fontsize=10)
+    ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
@@ -152,6 +193,7 @@ def format_text(name: str, summary: dict[str, Any], issues: str = "") -> str:
     lines = [
         f"{name}",
         f"duration         {summary['duration_s']:.2f} s at {summary['rate_hz']:.1f} Hz",
+        f"navigation from  {summary['navigation_start_s']:.2f} s (after the still start)",
         f"distance walked  {summary['distance_m']:.2f} m (estimate, horizontal)",
         f"final position   ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f}) m",
         f"stances          {summary['stances']}",
@@ -162,7 +204,14 @@ def format_text(name: str, summary: dict[str, Any], issues: str = "") -> str:
             f"ARMSE (PyShoe)   {summary['armse_pyshoe_m']:.3f} m",
             f"final error      {summary['final_error_m']:.3f} m",
         ]
-    else:
+    if "footprints" in summary:
+        lines += [
+            f"footprints       {summary['footprints']}",
+            f"footprint error  {summary['footprint_mean_error_m']:.3f} m mean, final "
+            f"{summary['footprint_final_error_m']:.3f} m "
+            f"({summary['footprint_final_error_pct']:.2f} % of the footprint path)",
+        ]
+    if "loop_closure_m" in summary:
         lines.append(f"loop closure     {summary['loop_closure_m']:.3f} m (end − start)")
     if issues:
         lines.append(issues)

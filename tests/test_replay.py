@@ -16,8 +16,8 @@ from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.io import Recording, load_recording
 from pednav_env.nav.mounting import axes_rotation, level_rotation, mounting_rotation
 from pednav_env.nav.static_start import initial_still_samples
-from pednav_env.replay.metrics import best_rotation, rotate_h, track_errors
-from pednav_env.replay.runner import prepare, run_prepared, run_recording
+from pednav_env.replay.metrics import best_rotation, footprint_errors, rotate_h, track_errors
+from pednav_env.replay.runner import STILL_SEARCH_S, prepare, run_prepared, run_recording
 from pednav_env.replay.setup import (
     RealFilterSetup,
     named_setup,
@@ -29,6 +29,7 @@ from pednav_env.rotations import euler_to_dcm
 DATA = Path(__file__).parent / "data"
 XIO = DATA / "xio_short_walk_13.5-17s.csv"
 PYSHOE = DATA / "replay" / "pyshoe_2017-11-22-11-48-35_first7s.mat"
+HALLWAY_MAT = DATA / "hallway" / "SensorConnectData_31_first9s_LLIO.mat"
 
 
 # ------------------------------------------------------------------ mounting
@@ -108,6 +109,78 @@ def test_metrics_on_a_rotated_copy_of_the_truth():
     assert m["armse_pyshoe_m"] == pytest.approx(m["armse_m"] / math.sqrt(2) * 450 / 500)
 
 
+def test_footprint_errors_on_a_hand_made_case():
+    """Three footprints g and estimates p̂, both referred to their first point. By
+    hand: Σ|p̂ − R(φ)g|² = Σ|p̂|² + Σ|g|² − 2(A cos φ + B sin φ), A = Σ p̂·g,
+    B = Σ (g × p̂)_z, smallest at φ = atan2(B, A)."""
+    g = np.array([[1.0, 1.0], [3.0, 1.0], [3.0, 2.0]])  # origin moves to the first
+    est = np.array([[5.0, 5.0], [5.0, 7.0], [4.0, 7.0 + 0.3]])
+    # relative: g' = (0,0), (2,0), (2,1); p' = (0,0), (0,2), (-1,2.3)
+    # A = Σ p'·g' = 0 + 0 + (-2 + 2.3) = 0.3; B = Σ (g' × p')_z = 4 + (4.6 + 1) = 9.6
+    phi = np.arctan2(9.6, 0.3)
+    # the same angle by brute force over a fine grid (independent of the closed form)
+    grid = np.linspace(-np.pi, np.pi, 200001)
+    cost = [
+        np.sum((np.array([[0, 0], [0, 2], [-1, 2.3]]) - rotate_h(g - g[0], a)) ** 2)
+        for a in grid[::100]
+    ]
+    assert abs(grid[::100][int(np.argmin(cost))] - phi) < 2e-3  # grid step 3.1e-3 rad
+    m = footprint_errors(est, g)
+    assert m["footprint_heading_offset_rad"] == pytest.approx(phi, abs=1e-12)
+    e = np.linalg.norm(np.array([[0, 0], [0, 2], [-1, 2.3]]) - rotate_h(g - g[0], phi), axis=1)
+    assert m["footprints"] == 3
+    assert m["footprint_mean_error_m"] == pytest.approx(e.mean())
+    assert m["footprint_final_error_m"] == pytest.approx(e[2])
+    assert m["footprint_final_error_pct"] == pytest.approx(100 * e[2] / 3.0)  # path 2 + 1 m
+    # exact turn, no error
+    m = footprint_errors(rotate_h(g, 0.4) + 7.0, g)
+    assert m["footprint_mean_error_m"] < 1e-12 and m[
+        "footprint_heading_offset_rad"
+    ] == pytest.approx(0.4)
+    with pytest.raises(ValueError, match="≥ 2 footfalls"):
+        footprint_errors(est[:1], g[:1])
+
+
+def test_still_start_found_after_a_settling_foot():
+    """The IMU moves during the first 0.2 s: the first still span is used and the
+    samples before it are left out (not an error); a still start beyond the search
+    horizon still is one."""
+    rec = load_recording(PYSHOE)
+    w = rec.omega_b.copy()
+    w[:40, 0] += 0.5  # rad/s, clearly moving
+    moved = Recording(rec.time, w, rec.f_b, rec.truth_pos, name="settling")
+    prep = prepare(moved, paper_setup())
+    assert 40 <= prep.skipped <= 60  # in steps of the 0.05 s stillness window
+    assert prep.num_samples == rec.num_samples - prep.skipped
+    assert prep.navigation_start_s == pytest.approx((prep.skipped + prep.n_align) / 200, rel=0.01)
+    np.testing.assert_array_equal(prep.truth_pos, load_recording(PYSHOE).truth_pos[prep.skipped :])
+    w[: int(STILL_SEARCH_S * 200) + 100, 0] += 0.5
+    with pytest.raises(ValueError, match=r"settling: .*no still span of 0.1 s begins in the first"):
+        prepare(Recording(rec.time, w, rec.f_b, name="settling"), paper_setup())
+
+
+def test_a_recording_that_is_all_still_start_is_refused():
+    rec = load_recording(PYSHOE)
+    short = Recording(rec.time[:50], rec.omega_b[:50], rec.f_b[:50], name="short")
+    with pytest.raises(ValueError, match=r"short: 50 samples \(0.25 s\), all of them the still"):
+        prepare(short, paper_setup())
+
+
+def test_footprints_follow_the_uniform_grid_and_the_skipped_start():
+    rec = load_recording(HALLWAY_MAT)
+    prep = prepare(rec, named_setup("real-fixed"))
+    np.testing.assert_array_equal(prep.footprints.sample, rec.footprints.sample)
+    # remove 3 samples before the second footprint: the grid refills them
+    keep = np.ones(rec.num_samples, dtype=bool)
+    keep[[500, 501, 502]] = False
+    from pednav_env.io import Footprints
+
+    fp = Footprints(rec.footprints.sample - 3 * (rec.footprints.sample > 502), rec.footprints.pos)
+    holed = Recording(rec.time[keep], rec.omega_b[keep], rec.f_b[keep], footprints=fp)
+    p2 = prepare(holed, named_setup("real-fixed"))
+    np.testing.assert_array_equal(p2.footprints.sample, rec.footprints.sample)
+
+
 # ------------------------------------------------------------------ the filter on real samples
 def test_paper_filter_on_the_pyshoe_sample_is_plausible():
     rec = load_recording(PYSHOE)
@@ -161,6 +234,7 @@ def test_pednav_run_json_keys_with_truth(capsys, tmp_path):
     assert set(out) == {
         "duration_s",
         "rate_hz",
+        "navigation_start_s",
         "distance_m",
         "final_position_m",
         "stances",
@@ -179,6 +253,7 @@ def test_pednav_run_json_keys_without_truth_and_text(capsys):
     assert set(out) == {
         "duration_s",
         "rate_hz",
+        "navigation_start_s",
         "distance_m",
         "final_position_m",
         "stances",

@@ -24,8 +24,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import scipy.io
 
+from pednav_env.io.footprints import FootprintTable
+from pednav_env.io.matfile import read_mat
 from pednav_env.io.recording import Recording
 from pednav_env.io.validate import LoadOptions, build_recording
 
@@ -40,8 +41,12 @@ GT_TO_RIGHT_HANDED = np.array([1.0, -1.0, 1.0])
 TRIAL_ERROR_DETECTORS = ("shoe", "ared", "ared_duplicate", "mbgtd", "vicon")
 
 
-def load_pyshoe_mat(path: str | Path, options: LoadOptions | None = None) -> Recording:
-    """Load one PyShoe ``.mat`` trial.
+def load_pyshoe_mat(
+    path: str | Path,
+    options: LoadOptions | None = None,
+    footprints: FootprintTable | None = None,
+) -> Recording:
+    """Load one PyShoe ``.mat`` trial (``footprints``: extra sparse truth, rarely).
 
     Raises
     ------
@@ -50,10 +55,7 @@ def load_pyshoe_mat(path: str | Path, options: LoadOptions | None = None) -> Rec
         of :func:`pednav_env.io.validate.build_recording`.
     """
     path = Path(path)
-    try:
-        data = scipy.io.loadmat(path)
-    except (OSError, ValueError, NotImplementedError) as exc:
-        raise ValueError(f"{path.name}: not a readable MATLAB file ({exc})") from None
+    data = read_mat(path)
     for key in ("imu", "ts"):
         if key not in data:
             keys = sorted(k for k in data if not k.startswith("__"))
@@ -92,4 +94,5 @@ def load_pyshoe_mat(path: str | Path, options: LoadOptions | None = None) -> Rec
         options=options or LoadOptions(),
         name=path.stem,
         metadata=meta,
+        footprints=None if footprints is None else footprints.checked(ts),
     )

@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from pednav_env.io.footprints import Footprints
+
 Array = NDArray[np.float64]
 
 #: Issue kinds a loader may report (``RecordingIssue.kind``).
@@ -68,6 +70,8 @@ class Recording:
     truth_pos : (T, 3) m or None, reference position of the foot per sample
         in the reference system's frame (e.g. motion capture); NaN rows mean
         "no reference at that sample" (reported in ``issues``).
+    footprints : the foot's position at footfalls (sparse truth) or None;
+        samples index this recording's samples.
     name : short name (file stem).
     metadata : free-form facts from the source (format, path, reference
         results stored with the data, …).
@@ -81,6 +85,7 @@ class Recording:
     name: str = "recording"
     metadata: Mapping[str, Any] = field(default_factory=dict)
     issues: tuple[RecordingIssue, ...] = ()
+    footprints: Footprints | None = None
 
     def __post_init__(self) -> None:
         t = np.asarray(self.time, dtype=float)
@@ -102,14 +107,23 @@ class Recording:
         if np.any(dt <= 0):
             row = int(np.flatnonzero(dt <= 0)[0]) + 1
             raise ValueError(
-                f"Recording.time must increase strictly: sample {row} (t={t[row]!r} s) "
-                f"is not after sample {row - 1} (t={t[row - 1]!r} s)"
+                f"Recording.time must increase strictly: sample {row} (t={float(t[row])!r} s) "
+                f"is not after sample {row - 1} (t={float(t[row - 1])!r} s)"
             )
         truth = None
         if self.truth_pos is not None:
             truth = np.asarray(self.truth_pos, dtype=float)
             if truth.shape != (t.size, 3):
                 raise ValueError(f"Recording.truth_pos must be ({t.size}, 3), got {truth.shape}")
+        fp = self.footprints
+        if fp is not None:
+            if not isinstance(fp, Footprints):
+                raise ValueError(f"Recording.footprints must be Footprints, got {type(fp)}")
+            if fp.sample[-1] >= t.size:
+                raise ValueError(
+                    f"Recording.footprints: sample {int(fp.sample[-1])} is outside the "
+                    f"recording ({t.size} samples)"
+                )
         for name, value in (("time", t), ("omega_b", w), ("f_b", f), ("truth_pos", truth)):
             if value is not None:
                 value = value.copy()
@@ -130,6 +144,10 @@ class Recording:
     def rate_hz(self) -> float:
         """Nominal sample rate: 1 / median sample interval (Hz)."""
         return float(1.0 / np.median(np.diff(self.time)))
+
+    @property
+    def has_footprints(self) -> bool:
+        return self.footprints is not None
 
     @property
     def has_truth(self) -> bool:

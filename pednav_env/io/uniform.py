@@ -60,6 +60,22 @@ class UniformSamples:
     def num_samples(self) -> int:
         return int(self.omega_b.shape[0])
 
+    def grid_index(self, sample: NDArray[np.integer]) -> NDArray[np.int64]:
+        """Grid positions of recording samples ``sample``."""
+        return np.flatnonzero(self.source_index >= 0)[np.asarray(sample, dtype=np.int64)]
+
+    def cropped(self, start: int) -> UniformSamples:
+        """The grid from position ``start`` on."""
+        truth = None if self.truth_pos is None else self.truth_pos[start:]
+        return UniformSamples(
+            self.rate_hz,
+            self.omega_b[start:],
+            self.f_b[start:],
+            truth,
+            self.filled[start:],
+            self.source_index[start:],
+        )
+
 
 def to_uniform(rec: Recording) -> UniformSamples:
     """The recording on its nominal grid, gaps filled by linear interpolation."""

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.constants import STANDARD_GRAVITY
+from pednav_env.io.footprints import Footprints
 from pednav_env.io.recording import Recording, RecordingIssue
 from pednav_env.io.saturation import bridge_saturated, runs, saturation_mask
 from pednav_env.io.uniform import grid_steps
@@ -47,6 +48,11 @@ MAX_PLAUSIBLE_RATE = 40.0
 STATIC_NORM_RANGE = (7.0, 13.0)
 #: Rows listed in an error or issue message.
 MAX_ROWS_LISTED = 5
+#: How to give a unit, for messages (header, command line, Python).
+UNIT_HINT = (
+    "in the header, e.g. 'gyro_x (deg/s)', or in a column layout: pednav run --layout; "
+    "CsvLayout in Python; or skip this check: --no-unit-check, LoadOptions(check_units=False)"
+)
 
 
 @dataclass(frozen=True)
@@ -126,14 +132,16 @@ def static_window(omega_b: Array, rate_hz: float, window_s: float = 0.25) -> sli
 def check_units(omega_b: Array, f_b: Array, rate_hz: float, namer: RowNamer, units: str) -> None:
     """``ValueError`` when the data do not look like rad/s and m/s² after conversion.
 
-    ``units`` names the declared units for the message (e.g. ``"deg/s, g"``).
+    ``units`` says, for the message, which units the data were read in and
+    where they came from (e.g. ``"angular rate in deg/s (from the header), …"``).
     """
     w = np.linalg.norm(omega_b, axis=1)
     if w.max() > MAX_PLAUSIBLE_RATE:
         row = int(np.argmax(w))
         raise ValueError(
             f"angular rate of {w.max():.1f} rad/s at {namer(row)} is beyond any MEMS gyro range "
-            f"(declared units: {units}) — the gyro data look like deg/s; declare the unit deg/s"
+            f"(read as {units}) — the gyro data look like deg/s: give the unit deg/s "
+            f"({UNIT_HINT})"
         )
     win = static_window(omega_b, rate_hz)
     norm = float(np.median(np.linalg.norm(f_b[win], axis=1)))
@@ -142,16 +150,16 @@ def check_units(omega_b: Array, f_b: Array, rate_hz: float, namer: RowNamer, uni
         return
     where = f"the stillest span ({namer(win.start)}…{namer(win.stop - 1)})"
     if 0.7 <= norm <= 1.3:
-        hint = "it looks like g: declare the accelerometer unit g"
+        hint = "it looks like g: give the accelerometer unit g"
     elif 0.7 * STANDARD_GRAVITY**2 <= norm <= 1.3 * STANDARD_GRAVITY**2:
-        hint = "it looks like m/s² declared as g: declare the accelerometer unit m/s^2"
+        hint = "it looks like m/s² read as g: give the accelerometer unit m/s^2"
     elif 700 <= norm <= 1300:
-        hint = "it looks like mg: declare the accelerometer unit mg"
+        hint = "it looks like mg: give the accelerometer unit mg"
     else:
         hint = "check the accelerometer unit and scale"
     raise ValueError(
-        f"static accelerometer norm {norm:.3g} m/s² over {where} after conversion from the "
-        f"declared units ({units}); expected about {STANDARD_GRAVITY} m/s² — {hint}"
+        f"static accelerometer norm {norm:.3g} m/s² over {where} (read as {units}); "
+        f"expected about {STANDARD_GRAVITY} m/s² — {hint} ({UNIT_HINT})"
     )
 
 
@@ -164,12 +172,15 @@ def build_recording(
     options: LoadOptions,
     name: str,
     metadata: Mapping[str, Any],
-    units: str = "rad/s, m/s²",
+    units: str = "rad/s and m/s² (the format's units)",
     extra_issues: tuple[RecordingIssue, ...] = (),
+    footprints: Footprints | None = None,
 ) -> Recording:
     """Validate raw SI arrays (rows in source order) and build a :class:`Recording`.
 
     ``namer(i)`` names source row ``i`` (0-based index into the arrays as given).
+    ``footprints`` index source rows; they are moved with the rows kept (a
+    footprint on a removed duplicate row goes to the identical row before it).
     """
     time = np.asarray(time, dtype=float).ravel()
     omega_b = np.asarray(omega_b, dtype=float)
@@ -194,8 +205,8 @@ def build_recording(
         if not exact.all():
             r = int(same_t[~exact][0])
             raise ValueError(
-                f"time does not increase: {namer(r)} repeats t={time[r]!r} s of {namer(r - 1)} "
-                "with different samples"
+                f"time does not increase: {namer(r)} repeats t={float(time[r])!r} s of "
+                f"{namer(r - 1)} with different samples"
             )
         if options.duplicates == "error":
             raise ValueError(
@@ -219,8 +230,8 @@ def build_recording(
     if np.any(dt < 0):
         k = int(np.flatnonzero(dt < 0)[0]) + 1
         raise ValueError(
-            f"time goes backwards: {namer(int(src[k]))} has t={t[k]!r} s, before "
-            f"{namer(int(src[k - 1]))} at t={t[k - 1]!r} s"
+            f"time goes backwards: {namer(int(src[k]))} has t={float(t[k])!r} s, before "
+            f"{namer(int(src[k - 1]))} at t={float(t[k - 1])!r} s"
         )
     nominal = float(np.median(dt))
     rate = 1.0 / nominal
@@ -233,9 +244,9 @@ def build_recording(
     if gaps.size:
         k = int(gaps[0]) + 1
         raise ValueError(
-            f"gap of {dt[k - 1]:.3f} s before {namer(int(src[k]))} (t={t[k]!r} s) is longer than "
-            f"max_gap_s={options.max_gap_s} s ({gaps.size} such gaps); cut the record there or "
-            "raise max_gap_s"
+            f"gap of {dt[k - 1]:.3f} s before {namer(int(src[k]))} (t={float(t[k])!r} s) is "
+            f"longer than max_gap_s={options.max_gap_s} s ({gaps.size} such gaps); cut the "
+            "record there or raise max_gap_s (--max-gap)"
         )
     _, steps = grid_steps(t)
     short = np.flatnonzero(steps > 1)
@@ -322,4 +333,15 @@ def build_recording(
                 )
             )
             truth = np.where(bad[:, None], np.nan, truth)
-    return Recording(t, w, f, truth, name=name, metadata=metadata, issues=tuple(issues))
+    if footprints is not None:
+        out = np.flatnonzero(footprints.sample >= n)
+        if out.size:
+            k = int(out[0])
+            raise ValueError(
+                f"{footprints.source}: footprint {k} at sample {int(footprints.sample[k])} is "
+                f"outside the recording ({n} samples)"
+            )
+        footprints = footprints.reindexed(np.searchsorted(src, footprints.sample, side="right") - 1)
+    return Recording(
+        t, w, f, truth, name=name, metadata=metadata, issues=tuple(issues), footprints=footprints
+    )

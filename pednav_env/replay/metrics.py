@@ -102,6 +102,20 @@ def track_errors(pos_est: Array, truth: Array, start: int) -> dict[str, float]:
     }
 
 
+def aligned_reference(pos_est: Array, truth: Array, start: int) -> Array:
+    """The reference ``(T, 2)`` in the estimate's frame as :func:`track_errors` compares
+    them: turned by its φ and placed at the estimate's first referenced position
+    (NaN rows stay NaN) — for drawing."""
+    est = np.asarray(pos_est, dtype=float)
+    ref = np.asarray(truth, dtype=float)
+    ok = np.isfinite(ref[start:]).all(axis=1)
+    if not ok.any():
+        raise ValueError("the reference has no finite sample after the alignment")
+    first = start + int(np.argmax(ok))
+    phi = best_rotation(est[start:, :2] - est[first, :2], ref[start:, :2] - ref[first, :2])
+    return est[first, :2] + rotate_h(ref[:, :2] - ref[first, :2], phi)
+
+
 def pyshoe_armse_as_published(pos_est: Array, truth: Array) -> float:
     """PyShoe's ARMSE with its own rotation (:func:`pyshoe_rotation`), for comparison."""
     ok = np.isfinite(truth).all(axis=1)
@@ -110,6 +124,44 @@ def pyshoe_armse_as_published(pos_est: Array, truth: Array) -> float:
     errp = ep - rotate_h(rp, pyshoe_rotation(ep[ok], rp[ok]))
     rms = np.sqrt(np.mean(errp**2, axis=1))
     return float(np.mean(rms[np.isfinite(rms)]))
+
+
+def footprint_errors(pos_at_footfalls: Array, footprints_h: Array) -> dict[str, float]:
+    """Errors at the footfalls, for truth known only there (docs/REAL_DATA.md).
+
+    Both sets are referred to their first footprint (the origin) and the
+    footprints are turned about the vertical by the angle φ that minimises the
+    summed squared horizontal error (:func:`best_rotation`, the closed-form 2-D
+    Kabsch/Umeyama rotation without scale): e_k = p̂_k − R(φ) g_k.
+
+    Parameters
+    ----------
+    pos_at_footfalls : (K, ≥2) the filter's position at each footfall sample (m).
+    footprints_h : (K, 2) the footprints (m), their own frame.
+
+    Returns ``footprints`` (K), ``footprint_mean_error_m`` (mean of |e_k| over
+    the K footprints, the origin's 0 included), ``footprint_final_error_m``
+    (|e_K|), ``footprint_final_error_pct`` (100 |e_K| / the length of the
+    polyline through the footprints) and ``footprint_heading_offset_rad`` (φ).
+    """
+    est = np.asarray(pos_at_footfalls, dtype=float)[:, :2]
+    ref = np.asarray(footprints_h, dtype=float)
+    if est.shape != ref.shape or est.shape[0] < 2:
+        raise ValueError(
+            f"need ≥ 2 footfalls with one estimate each, got {est.shape} and {ref.shape}"
+        )
+    est = est - est[0]
+    ref = ref - ref[0]
+    phi = best_rotation(est, ref)
+    err = np.linalg.norm(est - rotate_h(ref, phi), axis=1)
+    path_m = float(np.sum(np.linalg.norm(np.diff(ref, axis=0), axis=1)))
+    return {
+        "footprints": int(est.shape[0]),
+        "footprint_mean_error_m": float(err.mean()),
+        "footprint_final_error_m": float(err[-1]),
+        "footprint_final_error_pct": 100.0 * float(err[-1]) / path_m if path_m > 0 else math.nan,
+        "footprint_heading_offset_rad": float(phi),
+    }
 
 
 def loop_closure(pos_est: Array, start: int) -> float:

@@ -5,7 +5,10 @@ Steps (docs/REAL_DATA.md):
 1. the samples on a uniform grid (:func:`pednav_env.io.to_uniform`: gaps
    interpolated, jitter ignored), at the recording's own rate;
 2. the still span at the start (:mod:`pednav_env.nav.static_start`, at most
-   ``alignment_max_s``), which must exist;
+   ``alignment_max_s``), which must exist; when the IMU moves at the very
+   start (a foot settling), the first still span within
+   :data:`STILL_SEARCH_S` is used instead and the samples before it are left
+   out (``PreparedRecording.skipped``); at least one sample must follow it;
 3. the mounting rotation into body axes (:mod:`pednav_env.nav.mounting`),
    from that span's mean specific force when ``"auto"``;
 4. gravity: standard, or that span's mean |f|;
@@ -26,14 +29,20 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from pednav_env.io.footprints import Footprints
 from pednav_env.io.recording import Recording
 from pednav_env.io.uniform import UniformSamples, to_uniform
+from pednav_env.nav.detectors import window_samples
 from pednav_env.nav.mounting import mounting_rotation, rotate_samples
-from pednav_env.nav.static_start import initial_still_samples
+from pednav_env.nav.static_start import STILL_WINDOW_S, initial_still_samples
 from pednav_env.nav.zupt_ukf import ZuptUkf
 from pednav_env.replay.setup import RealFilterSetup
 
 Array = NDArray[np.float64]
+
+#: How far into a recording (s) the still span for the alignment is looked for
+#: when the IMU is not still at the very start.
+STILL_SEARCH_S = 5.0
 
 #: Engine attributes a schedule may set (per lane, per interval).
 KNOBS = (
@@ -51,7 +60,10 @@ class PreparedRecording:
     """A recording ready for the filter: uniform, body axes, alignment window.
 
     ``omega_b``/``f_b`` ``(M, 3)`` in body axes; ``truth_pos`` ``(M, 3)`` in
-    the recording's frame or None; ``n_align`` samples of still start.
+    the recording's frame or None; ``n_align`` samples of still start;
+    ``footprints`` on this grid (their ``sample`` index these M samples) or
+    None; ``skipped`` grid samples left out before the still start (0 unless
+    the IMU moved at the very start; the M samples begin after them).
     """
 
     name: str
@@ -64,6 +76,13 @@ class PreparedRecording:
     g: float
     setup: RealFilterSetup
     uniform: UniformSamples
+    footprints: Footprints | None = None
+    skipped: int = 0
+
+    @property
+    def navigation_start_s(self) -> float:
+        """Time of t₀ (end of the alignment) after the first recorded sample (s)."""
+        return (self.skipped + self.n_align) / self.rate_hz
 
     @property
     def num_samples(self) -> int:
@@ -74,12 +93,55 @@ class PreparedRecording:
         return self.num_samples / self.rate_hz
 
 
+def find_still_start(
+    omega_b: Array, f_b: Array, rate_hz: float, max_s: float, min_s: float
+) -> tuple[int, int]:
+    """(samples skipped, alignment samples): the still span at the start of
+    ``(T, 3)`` records or, if the IMU moves there, the first one that begins
+    within :data:`STILL_SEARCH_S` (searched in steps of the stillness window)."""
+    try:
+        return 0, initial_still_samples(omega_b, f_b, rate_hz, max_s, min_s)
+    except ValueError as first_error:
+        step = window_samples(STILL_WINDOW_S, rate_hz)
+        span = int(round((max_s + 2 * STILL_WINDOW_S) * rate_hz)) + step
+        for skip in range(step, min(int(STILL_SEARCH_S * rate_hz), len(omega_b)), step):
+            try:
+                stop = skip + span
+                n = initial_still_samples(omega_b[skip:stop], f_b[skip:stop], rate_hz, max_s, min_s)
+            except ValueError:
+                continue
+            return skip, n
+        raise ValueError(
+            f"{first_error}; no still span of {min_s} s begins in the first {STILL_SEARCH_S} s "
+            "either"
+        ) from None
+
+
 def prepare(rec: Recording, setup: RealFilterSetup) -> PreparedRecording:
     """Steps 1–4 of the module docstring; the setup returned has the gravity used."""
     u = to_uniform(rec)
-    n_align = initial_still_samples(
-        u.omega_b, u.f_b, u.rate_hz, setup.alignment_max_s, setup.alignment_min_s
-    )
+    try:
+        skip, n_align = find_still_start(
+            u.omega_b, u.f_b, u.rate_hz, setup.alignment_max_s, setup.alignment_min_s
+        )
+    except ValueError as exc:
+        raise ValueError(f"{rec.name}: {exc}") from None
+    footprints = None
+    if rec.footprints is not None:
+        grid = u.grid_index(rec.footprints.sample)
+        if grid[0] < skip:
+            raise ValueError(
+                f"{rec.name}: the IMU is not still before the first footprint (sample "
+                f"{int(rec.footprints.sample[0])}); no start for the alignment"
+            )
+        footprints = rec.footprints.reindexed(grid - skip)
+    if skip:
+        u = u.cropped(skip)
+    if u.num_samples <= n_align:
+        raise ValueError(
+            f"{rec.name}: {u.num_samples} samples ({u.num_samples / u.rate_hz:.2f} s), all of "
+            "them the still start used for the alignment: a walk must follow it"
+        )
     C_bs = mounting_rotation(setup.mounting, u.f_b[:n_align])
     omega_b = rotate_samples(C_bs, u.omega_b)
     f_b = rotate_samples(C_bs, u.f_b)
@@ -88,7 +150,7 @@ def prepare(rec: Recording, setup: RealFilterSetup) -> PreparedRecording:
         setup = setup.with_gravity(g)
     g = setup.filter.g
     return PreparedRecording(
-        rec.name, u.rate_hz, omega_b, f_b, u.truth_pos, n_align, C_bs, g, setup, u
+        rec.name, u.rate_hz, omega_b, f_b, u.truth_pos, n_align, C_bs, g, setup, u, footprints, skip
     )
 
 
