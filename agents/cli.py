@@ -9,8 +9,9 @@ Subcommands (their JSON formats are contracts, see DESIGN.md):
 - ``pednav train ENV_ID --algo ppo|sac [--timesteps N] [--seed S] [--n-envs K]
   [--config FILE] [--run-dir DIR] [--resume]`` — train a tuner (SB3).
 - ``pednav tune ENV_ID`` — CMA-ES search of the tuned-fixed baseline.
-- ``pednav run RECORDING [--format F] [--policy NAME] [--json] [--plot FILE]``
-  — the ZUPT-UKF on a recorded walk (docs/REAL_DATA.md).
+- ``pednav run RECORDING [--format F] [--policy NAME] [--footprints FILE|none]
+  [--json] [--plot FILE]`` — the ZUPT-UKF on a recorded walk
+  (docs/REAL_DATA.md); the default policy is ``real-fixed``.
 - ``pednav bench ENV [--json] [--sizes N ...]`` — env steps/s of the native
   vector env against a filterpy reference (ENV = foot, waist, marker).
 - ``pednav sim2real RECORDING... [--model M] [--walks N] [--json] [--plot DIR]``
@@ -24,6 +25,7 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
@@ -100,8 +102,31 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from agents.run_recording import format_text, run
+    from pednav_env.io import CsvLayout, LoadOptions
 
-    summary, rec = run(args.recording, args.format, args.policy, args.mounting, plot=args.plot)
+    footprints = None if args.footprints == "none" else args.footprints
+    layout = None
+    if args.layout is not None or args.rate is not None:
+        layout = CsvLayout.from_json(args.layout) if args.layout is not None else CsvLayout()
+        if args.rate is not None:
+            layout = replace(layout, rate_hz=args.rate)
+    options = LoadOptions(
+        max_gap_s=args.max_gap,
+        saturation=args.saturation,
+        gyro_range=args.gyro_range,
+        accel_range=args.accel_range,
+        check_units=not args.no_unit_check,
+    )
+    summary, rec = run(
+        args.recording,
+        args.format,
+        args.policy,
+        args.mounting,
+        options,
+        args.plot,
+        footprints,
+        layout,
+    )
     if rec.issues:
         print(rec.summary(), file=sys.stderr)
     print(json.dumps(summary) if args.json else format_text(rec.name, summary))
@@ -198,13 +223,74 @@ def build_parser() -> argparse.ArgumentParser:
 
     ru = sub.add_parser("run", help="run the ZUPT-UKF on a recording (docs/REAL_DATA.md)")
     ru.add_argument("recording", help="a .csv or .mat recording")
-    ru.add_argument("--format", default="auto", help="auto, csv, xio or pyshoe (default auto)")
+    ru.add_argument(
+        "--format",
+        default="auto",
+        help="auto (default: from the suffix and the content), csv, xio, sensorconnect, "
+        "pyshoe or gcp-mat",
+    )
     ru.add_argument(
         "--policy",
-        default="paper",
-        help="paper, real-fixed, or a policy name/path as in `pednav evaluate` (default paper)",
+        default="real-fixed",
+        help="real-fixed (default: the configuration chosen on real walks), paper (paper "
+        "003's filter; fails at walking speed on some sensors), or a policy name/path as in "
+        "`pednav evaluate`",
     )
-    ru.add_argument("--mounting", default=None, help="auto, none or axes like x,-y,-z")
+    ru.add_argument(
+        "--footprints",
+        metavar="FILE|none",
+        default="auto",
+        help="footprint CSV (truth at footfalls), or none; default: the file's own, or "
+        "<stem>_footprints.csv beside a SensorConnect CSV",
+    )
+    ru.add_argument("--mounting", default=None, help="auto (default), none or axes like x,-y,-z")
+    lo = ru.add_argument_group("loading (docs/REAL_DATA.md, Loading)")
+    lo.add_argument(
+        "--layout",
+        metavar="JSON|FILE",
+        default=None,
+        help='generic CSV column names and units, inline or in a file, e.g. \'{"time": "t", '
+        '"gyro_unit": "deg/s", "accel_unit": "g"}\' (keys as in CsvLayout)',
+    )
+    lo.add_argument(
+        "--rate",
+        metavar="HZ",
+        type=_positive_float,
+        default=None,
+        help="sample rate of a generic CSV without a time column",
+    )
+    lo.add_argument(
+        "--max-gap",
+        metavar="S",
+        type=_positive_float,
+        default=0.1,
+        help="longest gap in the time column accepted, s (default 0.1)",
+    )
+    lo.add_argument(
+        "--saturation",
+        choices=("flag", "bridge", "error"),
+        default="flag",
+        help="saturated samples: report (flag, default), replace by quintic bridges, or refuse",
+    )
+    lo.add_argument(
+        "--gyro-range",
+        metavar="RAD_S",
+        type=_positive_float,
+        default=None,
+        help="gyro range for the saturation check (default: detect clipping plateaus)",
+    )
+    lo.add_argument(
+        "--accel-range",
+        metavar="M_S2",
+        type=_positive_float,
+        default=None,
+        help="accelerometer range for the saturation check (default: detect plateaus)",
+    )
+    lo.add_argument(
+        "--no-unit-check",
+        action="store_true",
+        help="skip the plausibility check of the units (static |f| ≈ g, |ω| < 40 rad/s)",
+    )
     ru.add_argument("--json", action="store_true", help="print one JSON object")
     ru.add_argument("--plot", metavar="FILE", default=None, help="write a top view to FILE")
     ru.set_defaults(func=_cmd_run)
@@ -263,6 +349,16 @@ def _positive_int(text: str) -> int:
     value = int(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be ≥ 1, got {value}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
     return value
 
 

@@ -29,7 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from pednav_env.io import LoadOptions, Recording, load_recording
+from pednav_env.io import CsvLayout, LoadOptions, Recording, load_recording
+from pednav_env.io.hallway import AUTO, FootprintChoice
 from pednav_env.replay.metrics import (
     aligned_reference,
     footprint_errors,
@@ -114,6 +115,32 @@ def summarize(rec: Recording, run: RecordingRun) -> dict[str, Any]:
     return out
 
 
+def check_policy(name: str) -> None:
+    """``ValueError`` listing what ``pednav run --policy`` accepts, for an unknown name."""
+    from agents.evaluate import BUILTIN_POLICIES
+
+    if name in SETUP_NAMES or name in BUILTIN_POLICIES:
+        return
+    path = Path(name)
+    if path.suffix == ".zip" or path.exists():
+        return
+    raise ValueError(
+        f"unknown policy {name!r}: use {DEFAULT_POLICY} (the default), "
+        f"{', '.join(n for n in SETUP_NAMES + BUILTIN_POLICIES if n != DEFAULT_POLICY)}, "
+        "or a path to a run directory or saved SB3 model (.zip)"
+    )
+
+
+def check_output_path(path: str | Path, option: str) -> Path:
+    """An output file whose directory exists (checked before the run, not after)."""
+    path = Path(path)
+    if not path.parent.is_dir():
+        raise ValueError(f"{option} {path}: directory {path.parent} does not exist")
+    if path.is_dir():
+        raise ValueError(f"{option} {path}: is a directory; give a file name")
+    return path
+
+
 def run(
     path: str | Path,
     fmt: str = "auto",
@@ -121,10 +148,16 @@ def run(
     mounting: str | None = None,
     options: LoadOptions | None = None,
     plot: str | Path | None = None,
+    footprints: FootprintChoice = AUTO,
+    layout: CsvLayout | None = None,
 ) -> tuple[dict[str, Any], Recording]:
     """Load, filter and summarise one recording (the ``pednav run`` command);
-    returns the JSON object and the recording (for its issues)."""
-    rec = load_recording(path, format=fmt, options=options)
+    returns the JSON object and the recording (for its issues). ``options``,
+    ``layout`` and ``footprints`` are :func:`pednav_env.io.load_recording`'s."""
+    check_policy(policy)
+    if plot is not None:
+        plot = check_output_path(plot, "--plot")
+    rec = load_recording(path, fmt, options, layout, footprints)
     if policy in SETUP_NAMES:
         setup: RealFilterSetup = named_setup(policy)
         if mounting is not None:
@@ -136,7 +169,7 @@ def run(
         result, _ = run_with_policy(rec, policy)
     summary = summarize(rec, result)
     if plot is not None:
-        write_plot(rec, result, Path(plot), policy)
+        write_plot(rec, result, plot, policy)
     return summary, rec
 
 

@@ -22,7 +22,10 @@ With k = t₀ … T the navigation samples that have a reference:
   instead: :func:`pyshoe_rotation`);
 - ``final_error_m`` = |e_h(T)|;
 - ``loop_closure_m`` = |p̂(T) − p̂(t₀)| in 3-D, for walks that end where
-  they started (no reference needed).
+  they started (no reference needed);
+- footprint errors (:func:`footprint_errors`), for a reference known only at
+  footfalls: the same best rotation over the footprints only, both sets
+  referred to the first footprint.
 """
 
 from __future__ import annotations
