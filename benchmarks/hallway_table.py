@@ -1,0 +1,135 @@
+"""The hallway-walk table of docs/REAL_DATA.md: footprint errors per walk.
+
+    .venv/bin/python benchmarks/hallway_table.py [--shared DIR] [--policies P ...] [--json FILE]
+
+Runs every policy (default ``paper`` and ``real-fixed``) through ``pednav
+run``'s code on each hallway walk (``DIR/hallway-gcp-dev/*_LLIO.mat``, truth
+at the footfalls only) and puts the footprint errors beside those of PyShoe's
+LSTM tracks stored in the same files (``pyshoeTrajectory``), computed with the
+same metric (:func:`pednav_env.replay.metrics.footprint_errors`: origin at the
+first footprint, one best rotation about the vertical). Prints a Markdown
+table; ``--json`` writes every number. DIR defaults to ../shared/data.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from agents.run_recording import run_with_policy, summarize
+from pednav_env.io import load_recording
+from pednav_env.io.matfile import read_mat
+from pednav_env.replay.metrics import footprint_errors
+from pednav_env.replay.runner import prepare, run_prepared
+from pednav_env.replay.setup import SETUP_NAMES, named_setup
+
+ROOT = Path(__file__).resolve().parents[1]
+ERROR_KEYS = ("footprint_mean_error_m", "footprint_final_error_m", "footprint_final_error_pct")
+
+
+def run_policy(rec, policy: str):
+    if policy in SETUP_NAMES:
+        return run_prepared(prepare(rec, named_setup(policy)))
+    return run_with_policy(rec, policy)[0]
+
+
+def walk_facts(rec) -> dict:
+    """Duration, footprint path length and stride speeds (footprint to footprint)."""
+    fp = rec.footprints
+    step_m = np.linalg.norm(np.diff(fp.pos, axis=0), axis=1)
+    step_s = np.diff(rec.time[fp.sample])
+    speed = step_m / step_s
+    return {
+        "walk": rec.name.removesuffix("_LLIO"),
+        "duration_s": rec.duration_s,
+        "footprints": fp.count,
+        "path_m": float(step_m.sum()),
+        "median_stride_speed_m_s": float(np.median(speed)),
+        "max_stride_speed_m_s": float(speed.max()),
+    }
+
+
+def pyshoe_lstm(path: Path) -> dict:
+    """PyShoe's LSTM track in the file at its footfalls, against the footprints
+    (both as stored: one frame, so no reflection is needed)."""
+    d = read_mat(path)
+    idx = np.asarray(d["strideIndex"]).ravel().astype(int)
+    track = np.asarray(d["pyshoeTrajectory"], dtype=float)
+    m = footprint_errors(track[idx], np.asarray(d["GCP"], dtype=float))
+    return {k: m[k] for k in ERROR_KEYS}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--shared", default=str(ROOT.parent / "shared" / "data"))
+    ap.add_argument("--policies", nargs="+", default=["paper", "real-fixed"])
+    ap.add_argument("--json", default=None, help="write all numbers to this file")
+    args = ap.parse_args()
+    paths = sorted((Path(args.shared) / "hallway-gcp-dev").glob("*_LLIO.mat"))
+    if not paths:
+        raise SystemExit(f"no *_LLIO.mat in {Path(args.shared) / 'hallway-gcp-dev'}")
+    out: dict = {"policies": args.policies, "walks": []}
+    t0 = time.time()
+    for path in paths:
+        rec = load_recording(path)
+        row = walk_facts(rec)
+        row["pyshoe_lstm"] = pyshoe_lstm(path)
+        for pol in args.policies:
+            run = run_policy(rec, pol)
+            s = summarize(rec, run)
+            row[pol] = {k: s[k] for k in ERROR_KEYS + ("distance_m", "stances")}
+            row[pol]["diverged"] = bool(run.diverged[0])
+        out["walks"].append(row)
+        print(row["walk"], {p: round(row[p][ERROR_KEYS[0]], 3) for p in args.policies}, flush=True)
+    out["seconds"] = round(time.time() - t0, 1)
+    print(markdown(out))
+    if args.json:
+        Path(args.json).write_text(json.dumps(out, indent=1) + "\n")
+
+
+def _cell(m: dict) -> str:
+    """``mean / final (final %)``; a diverged run's final is where it froze: not shown."""
+    mean, final, pct = (m[k] for k in ERROR_KEYS)
+    fmt = (lambda x: f"{x:.2f}") if mean < 100 else (lambda x: f"{x:.0f}")
+    if m.get("diverged"):
+        return f"{fmt(mean)} / — (diverged)"
+    return f"{fmt(mean)} / {fmt(final)} ({pct:.1f} %)"
+
+
+def markdown(out: dict) -> str:
+    pols = out["policies"]
+    cols = ["PyShoe LSTM"] + pols
+    lines = [
+        "| walk | s | footprints | path m | median / max stride m/s | " + " | ".join(cols) + " |",
+        "|" + "---|" * (5 + len(cols)),
+    ]
+    rows = out["walks"]
+    for r in rows:
+        cells = [
+            r["walk"],
+            f"{r['duration_s']:.0f}",
+            str(r["footprints"]),
+            f"{r['path_m']:.1f}",
+            f"{r['median_stride_speed_m_s']:.2f} / {r['max_stride_speed_m_s']:.2f}",
+        ]
+        cells += [_cell(r["pyshoe_lstm"])] + [_cell(r[p]) for p in pols]
+        lines.append("| " + " | ".join(cells) + " |")
+    mean = ["**mean**", "", "", f"{np.mean([r['path_m'] for r in rows]):.1f}", ""]
+    for key in ["pyshoe_lstm"] + pols:
+        m = {k: float(np.mean([r[key][k] for r in rows])) for k in ERROR_KEYS}
+        mean.append(f"**{_cell(m)}**")
+    lines.append("| " + " | ".join(mean) + " |")
+    med = ["median", "", "", "", ""]
+    for key in ["pyshoe_lstm"] + pols:
+        m = {k: float(np.median([r[key][k] for r in rows])) for k in ERROR_KEYS}
+        med.append(_cell(m))
+    lines.append("| " + " | ".join(med) + " |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    main()
