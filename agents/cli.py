@@ -12,6 +12,9 @@ Subcommands (their JSON formats are contracts, see DESIGN.md):
 - ``pednav run RECORDING [--format F] [--policy NAME] [--footprints FILE|none]
   [--json] [--plot FILE]`` — the ZUPT-UKF on a recorded walk
   (docs/REAL_DATA.md); the default policy is ``real-fixed``.
+- ``pednav simulate --out FILE [--speed LO HI | --gait G] [--duration S]
+  [--rate HZ] [--imu GRADE] [--stops/--no-stops] [--seed N]`` — a simulated
+  foot walk written as a CSV recording that ``pednav run`` reads.
 - ``pednav bench ENV [--json] [--sizes N ...]`` — env steps/s of the native
   vector env against a filterpy reference (ENV = foot, waist, marker).
 - ``pednav sim2real RECORDING... [--model M] [--walks N] [--json] [--plot DIR]``
@@ -130,6 +133,27 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if rec.issues:
         print(rec.summary(), file=sys.stderr)
     print(json.dumps(summary) if args.json else format_text(rec.name, summary))
+    return 0
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from pednav_env.replay.simulate import SimulateConfig, simulate_walk, write_recording_csv
+
+    config = SimulateConfig(
+        speed_mps=None if args.speed is None else tuple(args.speed),
+        gait=args.gait,
+        duration_s=args.duration,
+        rate_hz=args.rate,
+        imu_grade=args.imu,
+        stops=args.stops,
+        seed=args.seed,
+    )
+    walk = simulate_walk(config)
+    path = write_recording_csv(walk, args.out)
+    print(
+        f"wrote {path}: {walk.time[-1]:.1f} s at {config.rate_hz:g} Hz, {walk.distance_m:.1f} m, "
+        f"IMU {config.grade}, model {config.model.name}, seed {config.seed}"
+    )
     return 0
 
 
@@ -294,6 +318,46 @@ def build_parser() -> argparse.ArgumentParser:
     ru.add_argument("--json", action="store_true", help="print one JSON object")
     ru.add_argument("--plot", metavar="FILE", default=None, help="write a top view to FILE")
     ru.set_defaults(func=_cmd_run)
+
+    si = sub.add_parser(
+        "simulate", help="write a simulated foot walk as a CSV recording (docs/REAL_DATA.md)"
+    )
+    si.add_argument("--out", metavar="FILE", required=True, help="CSV file to write")
+    si.add_argument(
+        "--speed",
+        nargs=2,
+        metavar=("LO", "HI"),
+        type=_positive_float,
+        default=None,
+        help="range of every stride's speed, m/s (0.1…4; the gait follows from the speed; "
+        "default 0.8 1.3 unless --gait)",
+    )
+    si.add_argument(
+        "--gait",
+        choices=("slow_walk", "walk", "fast_walk", "run"),
+        default=None,
+        help="one gait class at its own speeds, instead of --speed",
+    )
+    si.add_argument(
+        "--duration", metavar="S", type=_positive_float, default=60.0, help="s (default 60)"
+    )
+    si.add_argument(
+        "--rate", metavar="HZ", type=_positive_float, default=200.0, help="Hz (default 200)"
+    )
+    si.add_argument(
+        "--imu",
+        metavar="GRADE",
+        default=None,
+        help="IMU error grade (default: the calibrated model's, microstrain_gx5)",
+    )
+    si.add_argument(
+        "--stops",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="stand still for 1–5 s at the start of some legs (default on)",
+    )
+    si.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    si.set_defaults(func=_cmd_simulate)
     _add_sim2real(sub)
     return parser
 
