@@ -1,5 +1,6 @@
 """Imports run one way, gait → sensors → nav → envs → baselines → agents (io, replay,
-reproduce, calibration and testing are side packages), and no module imports another's ``_private``."""
+reproduce, calibration and testing are side packages), and no module imports another's
+``_private``."""
 
 import ast
 from pathlib import Path
