@@ -35,10 +35,20 @@ def test_threshold_detector_finds_simulated_stances(walk, request):
     tr = request.getfixturevalue(walk)
     det = threshold_condition(tr.omega_b, true_f_n3(tr), ThresholdDetectorConfig(), tr.rate_hz)[0]
     truth = tr.stance[0]
+    f_dev = np.abs(true_f_n3(tr)[0] - STANDARD_GRAVITY)
+    still = truth & (np.linalg.norm(tr.omega_b[0], axis=-1) < 1e-9) & (f_dev < 1e-9)
+    assert np.all(det[still])  # a still foot is always detected
     if walk == "paper_walk":
-        assert np.all(det[truth])  # the paper's stances are perfectly still
+        assert np.all(still[truth])  # the paper's stances are perfectly still
     else:
-        assert np.mean(det[truth]) > 0.5  # micro-motion makes some stance samples fail
+        # Stands and stops are still; the stance phases move. Heel micro-motion (foot.py:
+        # 0.2 v² mm at 13 Hz vertically, ≈ 1.1 m/s² peak at this walk's 0.9 m/s, under a
+        # sin² envelope) stays within Δf_max = 0.33 m/s² on ≈ 60 % of those samples, and
+        # the heel-strike transient (10 v² m/s², ~0.1 s) takes the first quarter of each
+        # ≈ 0.36 s stance: ≈ 45 % of the moving stance samples are expected to pass.
+        moving = truth & ~still
+        assert still.sum() > 0.5 * truth.sum() and moving.sum() > 100
+        assert np.mean(det[moving]) > 0.4
     false = det & ~truth
     # false detections only next to true stances (foot almost still at heel-off/strike)
     assert not np.any(false & ~near_boundary(truth, 8))

@@ -37,8 +37,14 @@ def test_episode_is_the_trial_and_the_return_is_minus_the_mean_error(env):
     assert info["trial"] == "pyshoe_2017-11-22-11-48-35_first7s"
     assert info["imu_grade"] == "recorded"
     assert len(rewards) == 12  # (1400 − alignment) samples / 100 per step
-    assert np.all(rewards <= 0) and -rewards.sum() < 1.0
-    assert info["distance"] > 3.0
+    assert np.all(rewards <= 0)
+    assert info["distance"] > 5.0  # 5.8 m walked in the 6 s after the still start
+    # A ZUPT-aided foot INS drifts about 1 % of the distance walked (0.06 m here);
+    # PyShoe's own filter, tuned for this trial, reaches 0.04 m in this metric over the
+    # whole 21 s trial (docs/REAL_DATA.md, PyShoe's 0.029 m × √2). Without working
+    # ZUPTs this 6 s walk drifts about 1 m (mean) and 2 m (final).
+    assert -rewards.sum() < 0.1  # the return is minus the time-averaged error
+    assert info["error"] < 0.25  # the final error
 
 
 def test_bad_data_directories():

@@ -192,7 +192,12 @@ def test_paper_filter_on_the_pyshoe_sample_is_plausible():
     truth_path = np.sum(np.linalg.norm(np.diff(prep.truth_pos[:, :2], axis=0), axis=1))
     assert truth_path > 3.0
     assert not run.diverged[0] and run.stances[0] >= 5
-    assert m["armse_m"] < 1.0 and m["final_error_m"] < 1.5  # misses stances, stays bounded
+    # Paper 003's real-data thresholds (0.039 rad/s, 0.15 m/s²) are tight for this
+    # 1 m/s walk and catch its stances late and short, so the error lies between a
+    # well-tuned ZUPT filter's ≈ 0.05 m (the real-fixed test below) and the ≈ 0.95 m
+    # mean / 2 m final of this 6 s walk with the ZUPTs ignored. The bounds fail a
+    # filter whose ZUPTs carry little weight (R × 100: 0.8 m mean, 1.7 m final).
+    assert m["armse_m"] < 0.6 and m["final_error_m"] < 1.2
 
 
 def test_real_fixed_setup_is_shipped_and_runs_on_the_sample():
@@ -201,7 +206,11 @@ def test_real_fixed_setup_is_shipped_and_runs_on_the_sample():
     assert RealFilterSetup.from_dict(setup.to_dict()) == setup
     run = run_recording(load_recording(PYSHOE), setup)
     m = track_errors(run.pos[0], run.prepared.truth_pos, run.start_sample)
-    assert m["armse_m"] < 0.25
+    # PyShoe's own filter tuned for this trial reaches 0.029 m PyShoe-ARMSE over the
+    # whole 21 s trial (docs/REAL_DATA.md), ≈ 0.04 m in our metric (× √2); the
+    # configuration shipped for all trials scores 1.5× PyShoe's on average. 0.08 m
+    # is twice PyShoe's; ignoring the ZUPTs gives ≈ 0.95 m.
+    assert m["armse_m"] < 0.08
 
 
 def test_schedule_equal_to_constant_knobs_gives_the_same_track():
