@@ -8,16 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from pednav_env import reproduce
+from agents.cli import main
 from pednav_env.gait.heel_knee import simulate_heel_knee
 from pednav_env.reproduce import paper001
 
 COORDS = ("heel_x", "heel_z", "knee_x", "knee_z")
-
-#: Full-size result documented in docs/REPRODUCTION.md (paper 001)
-#: (``paper001.run()``: 4000 walks, seed 0), in COORDS order.
-DOC_EKF = np.array([0.04547, 0.01277, 0.03699, 0.01382])
-DOC_LOWPASS = np.array([0.09990, 0.09163, 0.09714, 0.09176])
 
 
 def test_json_follows_the_design_contract() -> None:
@@ -48,10 +43,17 @@ def test_json_follows_the_design_contract() -> None:
     assert len(obj["rows"]) == 13
 
 
-def test_registered_with_the_reproduce_dispatcher() -> None:
-    res = reproduce.run("001", runs=5, seed=1)
-    assert res.paper == "001"
-    assert res.rows == paper001.run(runs=5, seed=1).rows
+def test_pednav_reproduce_runs_paper_001_and_rejects_unknown_ids(capsys) -> None:
+    """The command line reaches paper 001 through the dispatcher: its JSON carries
+    paper 001's rows (the thesis's values beside ours), and an unknown id is a
+    one-line error."""
+    assert main(["reproduce", "001", "--runs", "5", "--seed", "1", "--json"]) == 0
+    obj = json.loads(capsys.readouterr().out)
+    assert obj["paper"] == "001"
+    rows = {(r["config"], r["metric"]): r["paper"] for r in obj["rows"]}
+    assert rows[("ekf", "heel_x")] == 0.0575 and rows[("lowpass", "knee_z")] == 0.0400
+    assert main(["reproduce", "999"]) == 2
+    assert "has no reproduction" in capsys.readouterr().err
 
 
 def test_lowpass_error_matches_an_independent_prediction() -> None:
@@ -81,19 +83,30 @@ def test_lowpass_error_matches_an_independent_prediction() -> None:
     assert np.all(np.abs(res.lowpass - predicted) < 4 * se)
 
 
-def test_small_run_agrees_with_the_documented_full_run() -> None:
-    # Regression against the full-size table (4000 walks, seed 0) with a
-    # statistical tolerance: a different seed and 300 walks differ from it by
-    # sampling error only. The standard error SE of the small run's RMS comes
-    # from its walk-to-walk MSE spread; the full run's is sqrt(300/4000) of it,
-    # so the difference has s.e. SE · sqrt(1 + 300/4000) ≈ 1.04 SE; we allow 4.
-    res = paper001.evaluate(paper001.paper_scenario(), 300, 17)
-    for ours, mse, doc in (
-        (res.ekf, res.ekf_walker_mse, DOC_EKF),
-        (res.lowpass, res.lowpass_walker_mse, DOC_LOWPASS),
-    ):
-        se = mse.std(axis=0, ddof=1) / math.sqrt(len(mse)) / (2 * ours)
-        assert np.all(np.abs(ours - doc) < 4 * 1.04 * se), (ours, doc, se)
+def test_small_run_shows_the_thesis_claims() -> None:
+    """What the thesis (chapter 6) and the model imply, on 300 walks:
+
+    - the raw UWB error is the simulated σ = 0.1 m (eq 5.5);
+    - both filters beat the raw data, and the EKF is at least the thesis's "1.5 times
+      more accurate" than the low-pass (summed RMS);
+    - the EKF's z errors are far below its x errors: in eq 4.10 x depends on Δc_x·kT and
+      the phase (ω₀ + Δω)kT, so its uncertainty grows with elapsed time; z has no kT
+      (the thesis: 8×; we require 2×);
+    - the EKF is consistent: its mean NIS is the measurement dimension 4;
+    - no walk ends locked on another gait cycle, no covariance repair.
+    """
+    runs = 300
+    res = paper001.evaluate(paper001.paper_scenario(), runs, 17)
+    # RMS of 300 × 100 draws of N(0, σ²): standard error σ/√(2·30 000) ≈ 0.0004 m; 4 SE
+    np.testing.assert_allclose(res.raw, 0.1, atol=4 * 0.1 / math.sqrt(2 * runs * res.samples))
+    assert np.all(res.ekf < res.raw) and res.lowpass.sum() < res.raw.sum()
+    assert res.lowpass.sum() / res.ekf.sum() >= paper001.PAPER_IMPROVEMENT
+    heel_x, heel_z, knee_x, knee_z = res.ekf
+    assert heel_z < heel_x / 2 and knee_z < knee_x / 2
+    # NIS of a consistent filter averages 4 (sampling s.e. over 300 × 99 updates ≈ 0.02);
+    # the phase linearisation (17 % parameter spread) biases it by a few %. S is mostly R
+    # here, so an R off by 2× moves the mean NIS to ≈ 2 or ≈ 8.
+    assert abs(res.mean_nis - 4.0) < 0.2
     assert res.repairs == 0 and res.slip_fraction == 0.0
 
 
