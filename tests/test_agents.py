@@ -130,13 +130,41 @@ def test_hyperparameter_files_and_bad_names():
         load_hyperparams("ppo", "pednav/Nope-v0")
 
 
-def test_tuned_search_and_policy(tmp_path, monkeypatch):
+def _mean_error_of_constant_action(action, seeds) -> float:
+    """Independent path: the scalar env, one episode per seed, the same action."""
+    env = gym.make(ENV_ID, config=SHORT)
+    errors = []
+    for seed in seeds:
+        env.reset(seed=seed)
+        total, done = 0.0, False
+        while not done:
+            _, r, term, trunc, _ = env.step(np.asarray(action, np.float32))
+            total += r
+            done = term or trunc
+        errors.append(-total)
+    return float(np.mean(errors))
+
+
+def test_tuned_search_beats_action_zero_and_ships_its_policy(tmp_path, monkeypatch):
+    """A small CMA-ES run (4 training episodes, 3 generations of 6) finds a constant
+    action better than action 0 on its training episodes, and reports both objectives
+    as the scalar env measures them. Action 0 is the paper's filter, which loses
+    stances on fast random walks and diverges (docs/ENV_FOOT.md: 17.5 m mean error on
+    the random scenario, 62 % diverged); widening the thresholds a little already
+    roughly halves that, so the search must at least halve it."""
     monkeypatch.setattr(tuned_module, "RESULTS_FILE", tmp_path / "tuned.json")
     res = tuned_module.search(
-        ENV_ID, 4, episodes=2, generations=1, popsize=2, save=True, env_kwargs={"config": SHORT}
+        ENV_ID, 4, episodes=4, generations=3, popsize=6, save=True, env_kwargs={"config": SHORT}
     )
     assert len(res["action"]) == 4 and all(-1 <= a <= 1 for a in res["action"])
-    assert res["objective_m"] > 0 and res["evaluations"] == 2
+    assert res["evaluations"] == 18
+    seeds = [tuned_module.SEARCH_SEED + i for i in range(4)]
+    best = _mean_error_of_constant_action(res["action"], seeds)
+    paper = _mean_error_of_constant_action(np.zeros(4), seeds)
+    # same episodes and actions on another code path: equal up to summation order
+    assert res["objective_m"] == pytest.approx(best, rel=1e-9)
+    assert res["paper_objective_m"] == pytest.approx(paper, rel=1e-9)
+    assert best < 0.5 * paper
     space = gym.make(ENV_ID).action_space
     pol = TunedFixedPolicy.for_env(ENV_ID, space)
     a, _ = pol.predict(np.zeros((3, 20), np.float32))
