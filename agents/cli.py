@@ -9,8 +9,9 @@ Subcommands (their JSON formats are contracts, see DESIGN.md):
 - ``pednav train ENV_ID --algo ppo|sac [--timesteps N] [--seed S] [--n-envs K]
   [--config FILE] [--run-dir DIR] [--resume]`` — train a tuner (SB3).
 - ``pednav tune ENV_ID`` — CMA-ES search of the tuned-fixed baseline.
-- ``pednav run RECORDING [--format F] [--policy NAME] [--footprints FILE|none]
-  [--json] [--plot FILE]`` — the ZUPT-UKF on a recorded walk
+- ``pednav run RECORDING|DIR [--format F] [--policy NAME|SETUP.json]
+  [--footprints FILE|none] [--json] [--plot FILE] [--out TRACK.csv] [loader
+  options]`` — the ZUPT-UKF on a recorded walk or a folder of them
   (docs/REAL_DATA.md); the default policy is ``real-fixed``.
 - ``pednav simulate --out FILE [--speed LO HI | --gait G] [--duration S]
   [--rate HZ] [--imu GRADE] [--stops/--no-stops] [--seed N]`` — a simulated
@@ -104,32 +105,35 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from agents.run_recording import format_text, run
+    from pathlib import Path
+
+    from agents.run_recording import RunOptions, format_folder, format_text, run, run_folder
     from pednav_env.io import CsvLayout, LoadOptions
 
-    footprints = None if args.footprints == "none" else args.footprints
     layout = None
     if args.layout is not None or args.rate is not None:
         layout = CsvLayout.from_json(args.layout) if args.layout is not None else CsvLayout()
         if args.rate is not None:
             layout = replace(layout, rate_hz=args.rate)
-    options = LoadOptions(
-        max_gap_s=args.max_gap,
-        saturation=args.saturation,
-        gyro_range=args.gyro_range,
-        accel_range=args.accel_range,
-        check_units=not args.no_unit_check,
+    options = RunOptions(
+        fmt=args.format,
+        policy=args.policy,
+        mounting=args.mounting,
+        load=LoadOptions(
+            max_gap_s=args.max_gap,
+            saturation=args.saturation,
+            gyro_range=args.gyro_range,
+            accel_range=args.accel_range,
+            check_units=not args.no_unit_check,
+        ),
+        layout=layout,
+        footprints=None if args.footprints == "none" else args.footprints,
     )
-    summary, rec = run(
-        args.recording,
-        args.format,
-        args.policy,
-        args.mounting,
-        options,
-        args.plot,
-        footprints,
-        layout,
-    )
+    if Path(args.recording).is_dir():
+        result = run_folder(args.recording, options, args.plot, args.out)
+        print(json.dumps(result) if args.json else format_folder(result))
+        return 1 if any("error" in r for r in result["recordings"]) else 0
+    summary, rec = run(args.recording, options, args.plot, args.out)
     if rec.issues:
         print(rec.summary(), file=sys.stderr)
     print(json.dumps(summary) if args.json else format_text(rec.name, summary))
@@ -246,7 +250,9 @@ def build_parser() -> argparse.ArgumentParser:
     be.set_defaults(func=_cmd_bench)
 
     ru = sub.add_parser("run", help="run the ZUPT-UKF on a recording (docs/REAL_DATA.md)")
-    ru.add_argument("recording", help="a .csv or .mat recording")
+    ru.add_argument(
+        "recording", help="a .csv or .mat recording, or a folder of them (a summary table)"
+    )
     ru.add_argument(
         "--format",
         default="auto",
@@ -257,8 +263,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--policy",
         default="real-fixed",
         help="real-fixed (default: the configuration chosen on real walks), paper (paper "
-        "003's filter; fails at walking speed on some sensors), or a policy name/path as in "
-        "`pednav evaluate`",
+        "003's filter; fails at walking speed on some sensors), a setup JSON file "
+        "(docs/REAL_DATA.md), or a policy name/path as in `pednav evaluate`",
     )
     ru.add_argument(
         "--footprints",
@@ -316,7 +322,19 @@ def build_parser() -> argparse.ArgumentParser:
         help="skip the plausibility check of the units (static |f| ≈ g, |ω| < 40 rad/s)",
     )
     ru.add_argument("--json", action="store_true", help="print one JSON object")
-    ru.add_argument("--plot", metavar="FILE", default=None, help="write a top view to FILE")
+    ru.add_argument(
+        "--plot",
+        metavar="FILE|DIR",
+        default=None,
+        help="write a top view with the truth to FILE (for a folder: DIR/<name>.png)",
+    )
+    ru.add_argument(
+        "--out",
+        metavar="FILE|DIR",
+        default=None,
+        help="write the track to FILE (CSV: time, position, velocity, attitude, stance, "
+        "covariance diagonal; for a folder: DIR/<name>_track.csv)",
+    )
     ru.set_defaults(func=_cmd_run)
 
     si = sub.add_parser(

@@ -23,23 +23,18 @@ footprints ``footprints``, ``footprint_mean_error_m``,
 from __future__ import annotations
 
 import inspect
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from pednav_env.io import CsvLayout, LoadOptions, Recording, load_recording
+from pednav_env.io import CsvLayout, LoadOptions, Recording, find_recordings, load_recording
 from pednav_env.io.hallway import AUTO, FootprintChoice
-from pednav_env.replay.metrics import (
-    aligned_reference,
-    footprint_errors,
-    loop_closure,
-    rotate_h,
-    track_errors,
-)
+from pednav_env.replay.metrics import footprint_errors, loop_closure, track_errors
 from pednav_env.replay.runner import RecordingRun, prepare, run_prepared
-from pednav_env.replay.setup import SETUP_NAMES, RealFilterSetup, named_setup
+from pednav_env.replay.setup import SETUP_NAMES, RealFilterSetup, load_setup, named_setup
+from pednav_env.replay.track import run_states, write_track_csv
 
 #: Footprint keys of the JSON summary (:func:`pednav_env.replay.metrics.footprint_errors`).
 FOOTPRINT_KEYS = (
@@ -64,9 +59,10 @@ def _load_policy(name: str, action_space: Any) -> Any:
 
 
 def run_with_policy(
-    rec: Recording, policy_name: str, interval_s: float = 0.5
+    rec: Recording, policy_name: str, interval_s: float = 0.5, track: bool = False
 ) -> tuple[RecordingRun, dict[str, np.ndarray]]:
-    """Drive the replay core with a policy; return the replayed run and the knob schedule."""
+    """Drive the replay core with a policy; return the replayed run (``track``:
+    :func:`pednav_env.replay.runner.run_prepared`'s) and the knob schedule."""
     from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
     from pednav_env.envs.native import lane_spaces
 
@@ -87,8 +83,8 @@ def run_with_policy(
         if terminated[0] and core.engine.diverged[0]:
             break
     schedule = {k: np.array(v) for k, v in rows.items()}
-    prep = core._trial(0).prepared
-    return run_prepared(prep, schedule=schedule, interval_s=interval_s), schedule
+    prep = core.trials[0].prepared
+    return run_prepared(prep, schedule=schedule, interval_s=interval_s, track=track), schedule
 
 
 def summarize(rec: Recording, run: RecordingRun) -> dict[str, Any]:
@@ -115,19 +111,23 @@ def summarize(rec: Recording, run: RecordingRun) -> dict[str, Any]:
     return out
 
 
-def check_policy(name: str) -> None:
-    """``ValueError`` listing what ``pednav run --policy`` accepts, for an unknown name."""
+def resolve_policy(name: str) -> RealFilterSetup | str:
+    """A fixed setup (``real-fixed``, ``paper``, or a setup JSON file), or the name
+    of a simulated-env policy (``tuned``, ``adaptive``, ``pretrained``, a run
+    directory, an SB3 ``.zip``); ``ValueError`` listing the choices otherwise."""
     from agents.evaluate import BUILTIN_POLICIES
 
-    if name in SETUP_NAMES or name in BUILTIN_POLICIES:
-        return
+    if name in SETUP_NAMES:
+        return named_setup(name)
     path = Path(name)
-    if path.suffix == ".zip" or path.exists():
-        return
+    if path.suffix.lower() == ".json":
+        return load_setup(path)
+    if name in BUILTIN_POLICIES or path.suffix == ".zip" or path.is_dir():
+        return name
     raise ValueError(
         f"unknown policy {name!r}: use {DEFAULT_POLICY} (the default), "
         f"{', '.join(n for n in SETUP_NAMES + BUILTIN_POLICIES if n != DEFAULT_POLICY)}, "
-        "or a path to a run directory or saved SB3 model (.zip)"
+        "a setup JSON file, or a path to a run directory or saved SB3 model (.zip)"
     )
 
 
@@ -141,83 +141,137 @@ def check_output_path(path: str | Path, option: str) -> Path:
     return path
 
 
+@dataclass(frozen=True)
+class RunOptions:
+    """How ``pednav run`` loads and filters: the loader's arguments
+    (:func:`pednav_env.io.load_recording`), the policy, a mounting override."""
+
+    fmt: str = "auto"
+    policy: str = DEFAULT_POLICY
+    mounting: str | None = None
+    load: LoadOptions | None = None
+    layout: CsvLayout | None = None
+    footprints: FootprintChoice = AUTO
+
+
 def run(
     path: str | Path,
-    fmt: str = "auto",
-    policy: str = DEFAULT_POLICY,
-    mounting: str | None = None,
-    options: LoadOptions | None = None,
+    options: RunOptions | None = None,
     plot: str | Path | None = None,
-    footprints: FootprintChoice = AUTO,
-    layout: CsvLayout | None = None,
+    out: str | Path | None = None,
 ) -> tuple[dict[str, Any], Recording]:
     """Load, filter and summarise one recording (the ``pednav run`` command);
-    returns the JSON object and the recording (for its issues). ``options``,
-    ``layout`` and ``footprints`` are :func:`pednav_env.io.load_recording`'s."""
-    check_policy(policy)
-    if plot is not None:
-        plot = check_output_path(plot, "--plot")
-    rec = load_recording(path, fmt, options, layout, footprints)
-    if policy in SETUP_NAMES:
-        setup: RealFilterSetup = named_setup(policy)
-        if mounting is not None:
-            setup = replace(setup, mounting=mounting)
-        result = run_prepared(prepare(rec, setup))
+    returns the JSON object and the recording (for its issues). ``plot`` writes
+    the top view, ``out`` the track with its covariance (:mod:`pednav_env.replay.track`)."""
+    o = options or RunOptions()
+    policy = resolve_policy(o.policy)
+    plot = None if plot is None else check_output_path(plot, "--plot")
+    out = None if out is None else check_output_path(out, "--out")
+    rec = load_recording(path, o.fmt, o.load, o.layout, o.footprints)
+    track = out is not None
+    if isinstance(policy, RealFilterSetup):
+        setup = policy if o.mounting is None else replace(policy, mounting=o.mounting)
+        result = run_prepared(prepare(rec, setup), track=track)
     else:
-        if mounting is not None:
-            raise ValueError("--mounting applies to the fixed setups (paper, real-fixed) only")
-        result, _ = run_with_policy(rec, policy)
+        if o.mounting is not None:
+            raise ValueError("--mounting applies to the fixed setups (paper, real-fixed, JSON)")
+        result, _ = run_with_policy(rec, policy, track=track)
     summary = summarize(rec, result)
     if plot is not None:
-        write_plot(rec, result, plot, policy)
+        from agents.run_plot import write_plot
+
+        write_plot(
+            rec, result, plot, Path(o.policy).stem if o.policy.endswith(".json") else o.policy
+        )
+    if out is not None:
+        write_track_csv(run_states(result, float(rec.time[0])), out)
     return summary, rec
 
 
-def write_plot(rec: Recording, run: RecordingRun, path: Path, label: str) -> None:
-    """Top view of the estimated track with the truth, turned as in the metrics:
-    a dense reference as a line, a sparse one (few samples) as points, and
-    footprints as circles joined to the estimate at their footfalls."""
-    import matplotlib
+def run_folder(
+    directory: str | Path,
+    options: RunOptions | None = None,
+    plot_dir: str | Path | None = None,
+    out_dir: str | Path | None = None,
+) -> dict[str, Any]:
+    """:func:`run` on every recording of ``directory`` (:func:`pednav_env.io.find_recordings`).
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Returns ``{"policy", "recordings": [...]}``: per recording its ``recording``
+    (file name) and either the JSON object of :func:`run` plus ``issues`` (their
+    count) or ``error`` (the message). Plots and tracks go to ``plot_dir`` /
+    ``out_dir`` (created) as ``<stem>.png`` and ``<stem>_track.csv``.
+    """
+    o = options or RunOptions()
+    resolve_policy(o.policy)
+    paths = find_recordings(directory)
+    if not paths:
+        raise ValueError(f"{directory}: no recordings (.csv, .mat) found")
+    for d in (plot_dir, out_dir):
+        if d is not None:
+            Path(d).mkdir(parents=True, exist_ok=True)
+    rows = []
+    for path in paths:
+        row: dict[str, Any] = {"recording": path.name}
+        plot = None if plot_dir is None else Path(plot_dir) / f"{path.stem}.png"
+        out = None if out_dir is None else Path(out_dir) / f"{path.stem}_track.csv"
+        try:
+            summary, rec = run(path, o, plot, out)
+        except ValueError as exc:
+            row["error"] = str(exc)
+        else:
+            row.update(summary)
+            row["issues"] = len(rec.issues)
+        rows.append(row)
+    return {"policy": o.policy, "recordings": rows}
 
-    prep = run.prepared
-    na = prep.n_align
-    pos = run.pos[0]
-    fig, ax = plt.subplots(figsize=(6, 6), dpi=100)
-    if rec.has_truth:
-        ref = aligned_reference(pos, prep.truth_pos, na)
-        ok = np.isfinite(ref).all(axis=1)
-        sparse = ok.mean() < 0.5
-        ax.plot(
-            ref[ok, 0],
-            ref[ok, 1],
-            "k.:" if sparse else "k-",
-            lw=1,
-            ms=4,
-            label=f"reference ({int(ok.sum())} samples)" if sparse else "reference",
+
+#: Columns of the folder table: (JSON key, header, format).
+FOLDER_COLUMNS = (
+    ("duration_s", "s", "{:.1f}"),
+    ("distance_m", "dist. m", "{:.1f}"),
+    ("stances", "stances", "{}"),
+    ("armse_m", "ARMSE m", "{:.3f}"),
+    ("final_error_m", "final m", "{:.3f}"),
+    ("footprint_mean_error_m", "fp. mean m", "{:.3f}"),
+    ("footprint_final_error_pct", "fp. final %", "{:.2f}"),
+    ("loop_closure_m", "loop m", "{:.3f}"),
+)
+
+
+def format_folder(result: dict[str, Any]) -> str:
+    """The summary table of :func:`run_folder` (— where a measure does not apply)."""
+    rows = result["recordings"]
+    used = [c for c in FOLDER_COLUMNS if any(c[0] in r for r in rows)]
+    head = ["recording"] + [h for _, h, _ in used]
+    table = []
+    for r in rows:
+        if "error" in r:
+            table.append([r["recording"], "error: " + r["error"]])
+            continue
+        cells = [fmt.format(r[k]) if k in r else "—" for k, _, fmt in used]
+        table.append([r["recording"]] + cells)
+    ok = [t for t in table if not (len(t) == 2 and t[1].startswith("error: "))]
+    widths = [max(len(t[i]) for t in ok + [head]) for i in range(len(head))]
+    widths[0] = max(len(t[0]) for t in table + [head])
+    lines = [f"policy {result['policy']}"]
+    lines.append(
+        "  ".join(
+            [head[0].ljust(widths[0])]
+            + [h.rjust(w) for h, w in zip(head[1:], widths[1:], strict=True)]
         )
-    if prep.footprints is not None:
-        fp = prep.footprints
-        est = pos[fp.sample, :2]
-        m = footprint_errors(est, fp.pos)
-        ref = est[0] + rotate_h(fp.pos - fp.pos[0], m["footprint_heading_offset_rad"])
-        ax.plot(ref[:, 0], ref[:, 1], "ko", mfc="none", ms=5, label=f"footprints ({fp.count})")
-        ax.plot(est[:, 0], est[:, 1], "r.", ms=4, label="estimate at the footfalls")
-        for a, b in zip(ref, est, strict=True):
-            ax.plot([a[0], b[0]], [a[1], b[1]], "-", color="0.6", lw=0.7)
-    ax.plot(pos[na:, 0], pos[na:, 1], "r-", lw=1, label=f"ZUPT-UKF ({label})")
-    st = run.stance[0] & ~np.roll(run.stance[0], 1)
-    ax.plot(pos[st, 0], pos[st, 1], "b.", ms=3, label="stance starts")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_title(rec.name, fontsize=10)
-    ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    )
+    for t in table:
+        if t not in ok:
+            lines.append(f"{t[0].ljust(widths[0])}  {t[1]}")
+            continue
+        cells = [c.rjust(w) for c, w in zip(t[1:], widths[1:], strict=True)]
+        lines.append("  ".join([t[0].ljust(widths[0])] + cells))
+    failed = sum("error" in r for r in rows)
+    lines.append(
+        f"{len(rows) - failed} of {len(rows)} recordings run"
+        + (f", {failed} failed" if failed else "")
+    )
+    return "\n".join(lines)
 
 
 def format_text(name: str, summary: dict[str, Any], issues: str = "") -> str:

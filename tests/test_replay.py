@@ -17,13 +17,14 @@ from pednav_env.io import Recording, load_recording
 from pednav_env.nav.mounting import axes_rotation, level_rotation, mounting_rotation
 from pednav_env.nav.static_start import initial_still_samples
 from pednav_env.replay.metrics import best_rotation, footprint_errors, rotate_h, track_errors
-from pednav_env.replay.runner import STILL_SEARCH_S, prepare, run_prepared, run_recording
+from pednav_env.replay.runner import prepare, run_prepared, run_recording
 from pednav_env.replay.setup import (
     RealFilterSetup,
     named_setup,
     paper_setup,
     real_fixed_setup,
 )
+from pednav_env.replay.start import STILL_SEARCH_S
 from pednav_env.rotations import euler_to_dcm
 
 DATA = Path(__file__).parent / "data"

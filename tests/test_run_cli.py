@@ -173,3 +173,93 @@ def test_unit_check_gap_and_saturation_options(capsys, tmp_path):
     one_line_error(
         capsys, ["run", str(PYSHOE), "--gyro-range", "2", "--saturation", "error"], r"saturated"
     )
+
+
+def test_a_folder_gives_a_summary_table_and_json(capsys, tmp_path):
+    folder = tmp_path / "walks"
+    folder.mkdir()
+    for p in (PYSHOE, HALLWAY_MAT, XIO):
+        shutil.copy(p, folder)
+    (folder / "broken.mat").write_bytes(b"junk")
+    assert main(["run", str(folder)]) == 1  # one recording failed
+    text = capsys.readouterr().out
+    assert re.search(r"broken.mat +error: broken.mat: not a readable MATLAB", text)
+    assert "3 of 4 recordings run, 1 failed" in text
+    (folder / "broken.mat").unlink()
+    plots, tracks = tmp_path / "plots", tmp_path / "tracks"
+    argv = ["run", str(folder), "--json", "--plot", str(plots), "--out", str(tracks)]
+    assert main(argv) == 0
+    result = json.loads(capsys.readouterr().out)
+    rows = {r["recording"]: r for r in result["recordings"]}
+    assert result["policy"] == "real-fixed" and len(rows) == 3
+    assert "armse_m" in rows[PYSHOE.name] and "footprints" in rows[HALLWAY_MAT.name]
+    assert "loop_closure_m" in rows[XIO.name] and rows[XIO.name]["issues"] >= 1
+    # the numbers of the recording run alone; with --out the filter advances sample
+    # by sample, which changes only rounding (micrometres here)
+    assert main(["run", str(PYSHOE), "--json"]) == 0
+    alone = json.loads(capsys.readouterr().out)
+    for k, v in alone.items():
+        assert rows[PYSHOE.name][k] == pytest.approx(v, abs=1e-6), k
+    assert sorted(p.name for p in plots.iterdir()) == sorted(
+        f"{p.stem}.png" for p in (PYSHOE, HALLWAY_MAT, XIO)
+    )
+    assert len(list(tracks.glob("*_track.csv"))) == 3
+
+
+def test_out_writes_the_track(capsys, tmp_path):
+    out = tmp_path / "track.csv"
+    assert main(["run", str(HALLWAY_MAT), "--json", "--out", str(out)]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert data.shape == (1800, 21)
+    np.testing.assert_allclose(data[-1, 1:4], summary["final_position_m"], atol=1e-6)
+    one_line_error(
+        capsys, ["run", str(PYSHOE), "--out", str(tmp_path / "no" / "t.csv")], "does not exist"
+    )
+
+
+def test_policy_from_a_setup_json(capsys, tmp_path):
+    from pednav_env.replay.setup import REAL_FIXED_FILE, named_setup
+
+    assert main(["run", str(PYSHOE), "--json", "--policy", str(REAL_FIXED_FILE)]) == 0
+    shipped = json.loads(capsys.readouterr().out)
+    assert main(["run", str(PYSHOE), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out) == shipped  # real_fixed.json is real-fixed
+    d = named_setup("real-fixed").to_dict()
+    d["detector"]["threshold"] = 5e6  # a stricter SHOE threshold: another track
+    p = tmp_path / "mine.json"
+    p.write_text(json.dumps(d))
+    assert main(["run", str(PYSHOE), "--json", "--policy", str(p)]) == 0
+    assert json.loads(capsys.readouterr().out) != shipped
+    del d["detector"]
+    p.write_text(json.dumps(d))
+    one_line_error(capsys, ["run", str(PYSHOE), "--policy", str(p)], r"mine.json: .*'detector'")
+    p.write_text("{not json")
+    one_line_error(capsys, ["run", str(PYSHOE), "--policy", str(p)], r"mine.json: not a JSON")
+
+
+def test_plot_draws_a_sparse_reference(tmp_path):
+    """Truth at one sample in 100 (NaN elsewhere, also at the start of navigation):
+    the reference is placed and turned as in the metrics, not dropped."""
+    from pednav_env.io import Recording, load_recording
+    from pednav_env.replay.metrics import aligned_reference, track_errors
+    from pednav_env.replay.runner import prepare, run_prepared
+    from pednav_env.replay.setup import named_setup
+
+    rec = load_recording(PYSHOE)
+    sparse = np.full_like(rec.truth_pos, np.nan)
+    sparse[250::100] = rec.truth_pos[250::100]
+    srec = Recording(rec.time, rec.omega_b, rec.f_b, sparse, name="sparse")
+    run = run_prepared(prepare(srec, named_setup("real-fixed")))
+    ref = aligned_reference(run.pos[0], sparse, run.start_sample)
+    ok = np.isfinite(ref).all(axis=1)
+    assert ok.sum() == len(range(250, len(sparse), 100))
+    # at the referenced samples the error is what the metrics average
+    err = np.linalg.norm(run.pos[0, ok, :2] - ref[ok], axis=1)
+    assert err.mean() == pytest.approx(
+        track_errors(run.pos[0], sparse, run.start_sample)["armse_m"]
+    )
+    from agents.run_plot import write_plot
+
+    write_plot(srec, run, tmp_path / "sparse.png", "real-fixed")
+    assert (tmp_path / "sparse.png").stat().st_size > 1000

@@ -7,7 +7,7 @@ Steps (docs/REAL_DATA.md):
 2. the still span at the start (:mod:`pednav_env.nav.static_start`, at most
    ``alignment_max_s``), which must exist; when the IMU moves at the very
    start (a foot settling), the first still span within
-   :data:`STILL_SEARCH_S` is used instead and the samples before it are left
+   :data:`pednav_env.replay.start.STILL_SEARCH_S` is used instead and the samples before it are left
    out (``PreparedRecording.skipped``); at least one sample must follow it;
 3. the mounting rotation into body axes (:mod:`pednav_env.nav.mounting`),
    from that span's mean specific force when ``"auto"``;
@@ -32,17 +32,19 @@ from numpy.typing import NDArray
 from pednav_env.io.footprints import Footprints
 from pednav_env.io.recording import Recording
 from pednav_env.io.uniform import UniformSamples, to_uniform
-from pednav_env.nav.detectors import window_samples
 from pednav_env.nav.mounting import mounting_rotation, rotate_samples
-from pednav_env.nav.static_start import STILL_WINDOW_S, initial_still_samples
-from pednav_env.nav.zupt_ukf import ZuptUkf
+from pednav_env.nav.zupt_ukf import (
+    STATE_DIM,
+    ZuptUkf,
+    dcm_to_state,
+    process_noise,
+    state_mean,
+    state_residual,
+)
 from pednav_env.replay.setup import RealFilterSetup
+from pednav_env.replay.start import find_still_start
 
 Array = NDArray[np.float64]
-
-#: How far into a recording (s) the still span for the alignment is looked for
-#: when the IMU is not still at the very start.
-STILL_SEARCH_S = 5.0
 
 #: Engine attributes a schedule may set (per lane, per interval).
 KNOBS = (
@@ -93,28 +95,14 @@ class PreparedRecording:
         return self.num_samples / self.rate_hz
 
 
-def find_still_start(
-    omega_b: Array, f_b: Array, rate_hz: float, max_s: float, min_s: float
-) -> tuple[int, int]:
-    """(samples skipped, alignment samples): the still span at the start of
-    ``(T, 3)`` records or, if the IMU moves there, the first one that begins
-    within :data:`STILL_SEARCH_S` (searched in steps of the stillness window)."""
-    try:
-        return 0, initial_still_samples(omega_b, f_b, rate_hz, max_s, min_s)
-    except ValueError as first_error:
-        step = window_samples(STILL_WINDOW_S, rate_hz)
-        span = int(round((max_s + 2 * STILL_WINDOW_S) * rate_hz)) + step
-        for skip in range(step, min(int(STILL_SEARCH_S * rate_hz), len(omega_b)), step):
-            try:
-                stop = skip + span
-                n = initial_still_samples(omega_b[skip:stop], f_b[skip:stop], rate_hz, max_s, min_s)
-            except ValueError:
-                continue
-            return skip, n
-        raise ValueError(
-            f"{first_error}; no still span of {min_s} s begins in the first {STILL_SEARCH_S} s "
-            "either"
-        ) from None
+def body_frame(setup: RealFilterSetup, f_align: Array) -> tuple[Array, RealFilterSetup]:
+    """Steps 3–4 from the still span's specific force ``(W, 3)`` (sensor axes):
+    the mounting rotation ``C_bs`` and the setup with the gravity used."""
+    C_bs = mounting_rotation(setup.mounting, f_align)
+    if setup.gravity == "static":
+        g = float(np.linalg.norm(rotate_samples(C_bs, f_align), axis=1).mean())
+        setup = setup.with_gravity(g)
+    return C_bs, setup
 
 
 def prepare(rec: Recording, setup: RealFilterSetup) -> PreparedRecording:
@@ -142,12 +130,9 @@ def prepare(rec: Recording, setup: RealFilterSetup) -> PreparedRecording:
             f"{rec.name}: {u.num_samples} samples ({u.num_samples / u.rate_hz:.2f} s), all of "
             "them the still start used for the alignment: a walk must follow it"
         )
-    C_bs = mounting_rotation(setup.mounting, u.f_b[:n_align])
+    C_bs, setup = body_frame(setup, u.f_b[:n_align])
     omega_b = rotate_samples(C_bs, u.omega_b)
     f_b = rotate_samples(C_bs, u.f_b)
-    if setup.gravity == "static":
-        g = float(np.linalg.norm(f_b[:n_align], axis=1).mean())
-        setup = setup.with_gravity(g)
     g = setup.filter.g
     return PreparedRecording(
         rec.name, u.rate_hz, omega_b, f_b, u.truth_pos, n_align, C_bs, g, setup, u, footprints, skip
@@ -161,6 +146,10 @@ class RecordingRun:
     ``pos`` ``(N, M, 3)``: estimated position after each sample (held at 0
     during alignment); ``stance`` ``(N, M)`` detected stance; ``stances``
     ``(N,)`` number of detected stance phases; ``zupts`` accepted updates.
+    With ``track=True``: ``states`` ``(N, M, 9)`` the mean state after each
+    sample (position, velocity, pitch, roll, yaw — paper 003's order) and
+    ``covariance_diag`` ``(N, M, 9)`` the diagonal of its covariance
+    (:func:`state_covariance`); both hold the initial state during alignment.
     """
 
     prepared: PreparedRecording
@@ -171,6 +160,8 @@ class RecordingRun:
     rejected: NDArray[np.int64]
     repairs: NDArray[np.int64]
     diverged: NDArray[np.bool_]
+    states: Array | None = None
+    covariance_diag: Array | None = None
 
     @property
     def start_sample(self) -> int:
@@ -183,8 +174,14 @@ def run_prepared(
     knobs: Mapping[str, Array] | None = None,
     schedule: Mapping[str, Array] | None = None,
     interval_s: float = 0.5,
+    track: bool = False,
 ) -> RecordingRun:
     """Filter a prepared recording on ``num_lanes`` lanes.
+
+    ``track=True`` also records the state and its covariance after every
+    sample; the filter then advances one sample per call (the same filter up
+    to rounding, :meth:`pednav_env.nav.zupt_ukf.ZuptUkf.advance`), about
+    0.2 ms per sample.
 
     Parameters
     ----------
@@ -196,7 +193,7 @@ def run_prepared(
     n = int(num_lanes)
     e = ZuptUkf(prep.setup.filter, prep.rate_hz, n)
     for name, value in (knobs or {}).items():
-        _set_knob(e, name, np.broadcast_to(np.asarray(value, dtype=float), (n,)))
+        set_knob(e, name, np.broadcast_to(np.asarray(value, dtype=float), (n,)))
     w = np.broadcast_to(prep.omega_b, (n,) + prep.omega_b.shape)
     f = np.broadcast_to(prep.f_b, (n,) + prep.f_b.shape)
     na = prep.n_align
@@ -204,6 +201,12 @@ def run_prepared(
     m = prep.num_samples
     pos = np.zeros((n, m, 3))
     stance = np.zeros((n, m), dtype=bool)
+    states = cov = None
+    if track:
+        states = np.empty((n, m, STATE_DIM))
+        cov = np.empty((n, m, STATE_DIM))
+        states[:, :na] = e.mean_state()[:, None]
+        cov[:, :na] = np.diagonal(e.P, axis1=1, axis2=2)[:, None]
     shoe = None
     if e.uses_shoe:
         from pednav_env.nav.detectors import shoe_statistic
@@ -216,16 +219,29 @@ def run_prepared(
             for name, table in schedule.items():
                 table = np.asarray(table, dtype=float)
                 row = table[min(interval, table.shape[0] - 1)]
-                _set_knob(e, name, np.broadcast_to(row, (n,)))
+                set_knob(e, name, np.broadcast_to(row, (n,)))
         s1 = min(s0 + k, m)
-        res = e.advance(
-            w[:, s0:s1],
-            f[:, s0:s1],
-            None if shoe is None else shoe[:, s0:s1],
-            record="position",
-        )
-        pos[:, s0:s1] = res.positions
-        stance[:, s0:s1] = res.stance
+        if not track:
+            res = e.advance(
+                w[:, s0:s1],
+                f[:, s0:s1],
+                None if shoe is None else shoe[:, s0:s1],
+                record="position",
+            )
+            pos[:, s0:s1] = res.positions
+            stance[:, s0:s1] = res.stance
+            continue
+        for j in range(s0, s1):
+            res = e.advance(
+                w[:, j : j + 1],
+                f[:, j : j + 1],
+                None if shoe is None else shoe[:, j : j + 1],
+                record="state",
+            )
+            states[:, j] = res.states[:, 0]
+            cov[:, j] = state_covariance(e, diagonal=True)
+            stance[:, j] = res.stance[:, 0]
+        pos[:, s0:s1] = states[:, s0:s1, :3]
     return RecordingRun(
         prep,
         pos,
@@ -235,10 +251,31 @@ def run_prepared(
         e.rejected.copy(),
         e.repairs.copy(),
         e.diverged.copy(),
+        states,
+        cov,
     )
 
 
-def _set_knob(e: ZuptUkf, name: str, value: Array) -> None:
+def state_covariance(e: ZuptUkf, diagonal: bool = False) -> Array:
+    """Covariance ``(N, 9, 9)`` of each walker's state now (its diagonal ``(N, 9)``
+    with ``diagonal``): the spread of the sigma points, moved by the strapdown
+    since their last redraw, plus the process noise Q of that interval — the
+    prior a ZUPT at this sample would use (right after a ZUPT, the posterior)."""
+    sig = dcm_to_state(e.sig_C, e.sig_v, e.sig_p)
+    d = state_residual(sig, state_mean(sig, e.weights.Wm)[:, None])
+    if diagonal:
+        tau = e.elapsed_s[:, None] ** np.arange(1, 5) * e.process_noise_scale[:, None]
+        q = tau @ np.diagonal(e.q_basis, axis1=1, axis2=2)
+        return np.einsum("s,nsi->ni", e.weights.Wc, d * d) + q
+    spread = np.einsum("s,nsi,nsj->nij", e.weights.Wc, d, d)
+    q = process_noise(
+        e.config.assumed_imu, e.rate_hz, e.elapsed_s, e.process_noise_scale, e.q_basis
+    )
+    return spread + q
+
+
+def set_knob(e: ZuptUkf, name: str, value: Array) -> None:
+    """Set knob ``name`` (:data:`KNOBS`) of every walker of ``e`` to ``value`` ``(N,)``."""
     if name not in KNOBS:
         raise ValueError(f"unknown knob {name!r}; knobs: {', '.join(KNOBS)}")
     if not np.all(np.isfinite(value)) or np.any(value < 0):

@@ -140,6 +140,34 @@ def real_fixed_setup(path: Path = REAL_FIXED_FILE) -> RealFilterSetup:
     return RealFilterSetup.from_dict(json.loads(path.read_text())["setup"])
 
 
+def load_setup(path: str | Path) -> RealFilterSetup:
+    """A setup from a JSON file: :meth:`RealFilterSetup.to_dict`'s object, or a
+    file like ``real_fixed.json`` that holds it under ``"setup"``.
+
+    Raises
+    ------
+    ValueError
+        A missing or unreadable file, or a bad or missing entry (the file named).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"setup file {path} not found")
+    try:
+        d = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path.name}: not a JSON setup file ({exc})") from None
+    if isinstance(d, dict) and "setup" in d:
+        d = d["setup"]
+    if not isinstance(d, dict):
+        raise ValueError(f"{path.name}: a setup is a JSON object")
+    try:
+        return RealFilterSetup.from_dict(d)
+    except KeyError as exc:
+        raise ValueError(f"{path.name}: the setup has no {exc} entry") from None
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{path.name}: {exc}") from None
+
+
 def named_setup(name: str) -> RealFilterSetup:
     """A shipped setup by name (``SETUP_NAMES``)."""
     if name == "paper":
@@ -154,6 +182,7 @@ __all__ = [
     "SETUP_NAMES",
     "STANDARD_GRAVITY",
     "RealFilterSetup",
+    "load_setup",
     "named_setup",
     "paper_setup",
     "real_fixed_setup",
