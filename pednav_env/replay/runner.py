@@ -95,14 +95,12 @@ class PreparedRecording:
         return self.num_samples / self.rate_hz
 
 
-def body_frame(setup: RealFilterSetup, f_align: Array) -> tuple[Array, RealFilterSetup]:
-    """Steps 3–4 from the still span's specific force ``(W, 3)`` (sensor axes):
-    the mounting rotation ``C_bs`` and the setup with the gravity used."""
-    C_bs = mounting_rotation(setup.mounting, f_align)
-    if setup.gravity == "static":
-        g = float(np.linalg.norm(rotate_samples(C_bs, f_align), axis=1).mean())
-        setup = setup.with_gravity(g)
-    return C_bs, setup
+def with_gravity_of(setup: RealFilterSetup, f_align_b: Array) -> RealFilterSetup:
+    """Step 4: with ``gravity="static"``, the setup with g = the mean |f| of the
+    still span ``(W, 3)`` (body axes); else ``setup`` unchanged."""
+    if setup.gravity != "static":
+        return setup
+    return setup.with_gravity(float(np.linalg.norm(f_align_b, axis=1).mean()))
 
 
 def prepare(rec: Recording, setup: RealFilterSetup) -> PreparedRecording:
@@ -130,9 +128,10 @@ def prepare(rec: Recording, setup: RealFilterSetup) -> PreparedRecording:
             f"{rec.name}: {u.num_samples} samples ({u.num_samples / u.rate_hz:.2f} s), all of "
             "them the still start used for the alignment: a walk must follow it"
         )
-    C_bs, setup = body_frame(setup, u.f_b[:n_align])
+    C_bs = mounting_rotation(setup.mounting, u.f_b[:n_align])
     omega_b = rotate_samples(C_bs, u.omega_b)
     f_b = rotate_samples(C_bs, u.f_b)
+    setup = with_gravity_of(setup, f_b[:n_align])
     g = setup.filter.g
     return PreparedRecording(
         rec.name, u.rate_hz, omega_b, f_b, u.truth_pos, n_align, C_bs, g, setup, u, footprints, skip

@@ -46,9 +46,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.nav.detectors import shoe_statistic, window_samples
-from pednav_env.nav.mounting import rotate_samples
+from pednav_env.nav.mounting import mounting_rotation, rotate_samples
 from pednav_env.nav.zupt_ukf import STATE_DIM, ZuptUkf
-from pednav_env.replay.runner import body_frame, set_knob, state_covariance
+from pednav_env.replay.runner import set_knob, state_covariance, with_gravity_of
 from pednav_env.replay.setup import RealFilterSetup, named_setup
 from pednav_env.replay.start import find_still_start
 
@@ -217,9 +217,10 @@ class ZuptStream:
         if final and len(w) <= skip + na:
             return self._empty()
         self.skipped, self.n_align = skip, na
-        self.C_bs, self.setup = body_frame(s, f[skip : skip + na])
+        self.C_bs = mounting_rotation(s.mounting, f[skip : skip + na])
         wb = rotate_samples(self.C_bs, w[skip:])
         fb = rotate_samples(self.C_bs, f[skip:])
+        self.setup = with_gravity_of(s, fb[:na])
         e = ZuptUkf(self.setup.filter, self.rate_hz, 1)
         for name, value in self._knobs.items():
             set_knob(e, name, np.array([value]))
