@@ -180,7 +180,7 @@ def run_prepared(
     ``track=True`` also records the state and its covariance after every
     sample; the filter then advances one sample per call (the same filter up
     to rounding, :meth:`pednav_env.nav.zupt_ukf.ZuptUkf.advance`), about
-    0.2 ms per sample.
+    0.3 ms of CPU per sample.
 
     Parameters
     ----------

@@ -30,7 +30,7 @@ navigation), attitude (ψ, θ, γ: yaw, pitch, roll, paper 003's 3-2-1 Euler
 angles of body → navigation), detected stance, and with ``covariance=True``
 the diagonal of the state covariance (:func:`pednav_env.replay.runner.
 state_covariance`; the filter then advances one sample per call, about
-0.2 ms per sample). The knobs (:data:`pednav_env.replay.runner.KNOBS`) may be
+0.3 ms of CPU per sample). The knobs (:data:`pednav_env.replay.runner.KNOBS`) may be
 changed between calls (:meth:`ZuptStream.set_knobs`).
 
 Fed the samples of a recording in blocks of any size, the stream gives the
