@@ -193,3 +193,22 @@ def test_unreadable_files_are_named(tmp_path):
     p.write_bytes("time,gyro_x (°/s)\n1,2\n".encode("latin-1"))
     with pytest.raises(ValueError, match=r"latin.csv: not UTF-8 text"):
         load_recording(p)
+
+
+def test_a_footprint_file_for_a_generic_csv_is_taken_as_given(tmp_path):
+    """Footprints for any format: placed by timestamp, positions not reflected."""
+    rec = load_recording(MAT)
+    p = tmp_path / "walk.csv"
+    data = np.column_stack((rec.time, rec.omega_b, rec.f_b))
+    header = "time,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z"
+    np.savetxt(p, data, delimiter=",", header=header, comments="", fmt="%.10g")
+    fp = rec.footprints
+    lines = ["strideIndex,timestamp,gcpX,gcpY"]
+    for s, (x, y) in zip(fp.sample, fp.pos, strict=True):
+        lines.append(f"{s},{float(rec.time[s])!r},{float(x)!r},{float(y)!r}")
+    (tmp_path / "fp.csv").write_text("\n".join(lines) + "\n")
+    got = load_recording(p, footprints=tmp_path / "fp.csv")
+    assert got.metadata["format"] == "csv"
+    np.testing.assert_array_equal(got.footprints.sample, fp.sample)
+    np.testing.assert_array_equal(got.footprints.pos, fp.pos)
+    assert not load_recording(p).has_footprints  # nothing beside a generic CSV by default
