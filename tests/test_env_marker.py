@@ -15,14 +15,13 @@ from gymnasium.utils import seeding
 
 import pednav_env  # noqa: F401  (registers the environments)
 from pednav_env.envs import marker_track
-from pednav_env.envs.marker_core import (
-    MarkerTrackConfig,
-    MarkerTrackCore,
-    generate_episode,
-    uwb_spec,
-)
+from pednav_env.envs.marker_config import MarkerTrackConfig, uwb_spec
+from pednav_env.envs.marker_core import MarkerTrackCore
+from pednav_env.envs.marker_episode import generate_episode
 from pednav_env.gait.heel_knee import simulate_heel_knee
-from pednav_env.nav.marker_ekf import MarkerEkfConfig, MarkerEkfEngine, run_marker_ekf
+from pednav_env.nav.marker_ekf import MarkerEkfEngine
+from pednav_env.nav.marker_model import MarkerEkfConfig
+from pednav_env.nav.marker_run import run_marker_ekf
 from pednav_env.sensors.uwb import measure_uwb
 from pednav_env.testing.reference_marker import FilterpyMarkerEngine
 
@@ -112,14 +111,14 @@ def test_episode_uwb_record_is_measure_uwb_of_its_walk():
 def test_reanchoring_is_an_exact_reparametrisation():
     e = MarkerEkfEngine(MarkerEkfConfig(), 4)
     rng = np.random.default_rng(1)
-    e.x[:] = 0.05 * np.abs(e.p0) * rng.standard_normal((6, 4))
+    e.x[:] = (0.05 * np.abs(e.p0)[:, None] * rng.standard_normal((6, 4))).T
     t = np.array([9.0, 12.3, 20.0, 30.0])
     core = MarkerTrackCore(MarkerTrackConfig(), 4, ENV_ID)
     core.engine = e
     before = e.markers(t + 0.37)
     core._reanchor(np.round(t / 0.1).astype(np.int64), np.ones(4, dtype=bool))
     assert np.all(e.t_anchor > 0) and np.all(t - e.t_anchor >= core.config.reanchor_keep_s)
-    omega = e.p0[5, 0] + e.x[5]
+    omega = e.p0[5] + e.x[:, 5]
     cycles = omega * e.t_anchor / (2 * np.pi)
     np.testing.assert_allclose(cycles, np.round(cycles), atol=1e-9)  # a cycle boundary
     np.testing.assert_allclose(e.markers(t + 0.37), before, atol=1e-12)
@@ -133,7 +132,7 @@ def test_out_of_range_actions_are_clipped_and_counted():
     assert info["knobs"]["q_amplitude_scale"] == pytest.approx(1000.0)
     assert info["knobs"]["q_trend_scale"] == pytest.approx(1e-3)
     assert info["knobs"]["r_scale"] == pytest.approx(100.0)
-    np.testing.assert_allclose(env.core.engine.r[:, 0], 100.0 * 0.01)
+    np.testing.assert_allclose(env.core.engine.r[0], 100.0 * 0.01)
     _, _, _, _, info = env.step(np.zeros(4))
     assert info["clipped_actions"] == 1
 
@@ -160,8 +159,8 @@ def test_paper_scenario_and_action_zero_is_the_paper_filter():
         "r_scale": 1.0,
     }
     paper = MarkerEkfConfig()
-    np.testing.assert_array_equal(env.core.engine.q[:, 0], paper.process.process_noise)
-    np.testing.assert_array_equal(env.core.engine.r[:, 0], paper.meas_std**2)
+    np.testing.assert_array_equal(env.core.engine.q[0], paper.process.process_noise)
+    np.testing.assert_array_equal(env.core.engine.r[0], paper.meas_std**2)
     assert env.config.reanchor_after_s == math.inf
     assert obs.shape == (29,)
     _, _, info = rollout(env, 1)

@@ -8,16 +8,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from pednav_env.gait.heel_knee import (
-    I_AX,
-    I_CX,
-    I_OMEGA,
-    HeelKneeConfig,
-    HeelKneeNominal,
-    heel_knee_positions,
-    process_model,
-    simulate_heel_knee,
-)
+from pednav_env.gait.heel_knee import HeelKneeConfig, simulate_heel_knee
+from pednav_env.gait.heel_knee_model import I_AX, I_CX, I_OMEGA, HeelKneeNominal, process_model
+from pednav_env.nav.marker_model import heel_knee_positions
 
 
 def rngs(seed: int, n: int) -> list[np.random.Generator]:

@@ -20,7 +20,7 @@ from functools import partial
 from typing import Any
 
 from agents.bench.timing import DEFAULT_SIZES, bench_native_vs_reference
-from pednav_env.envs.marker_core import MarkerTrackConfig
+from pednav_env.envs.marker_config import MarkerTrackConfig
 from pednav_env.envs.marker_track import MarkerTrackVectorEnv
 from pednav_env.testing.reference_marker import ReferenceMarkerEnv
 

@@ -6,12 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from pednav_env.envs.marker_core import (
-    ACTION_KNOBS,
-    OBS_FEATURES,
-    MarkerTrackConfig,
-    MarkerTrackCore,
-)
+from pednav_env.envs.marker_config import ACTION_KNOBS, MarkerTrackConfig
+from pednav_env.envs.marker_core import OBS_FEATURES, MarkerTrackCore
 from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces, make_config
 
 ENV_ID = "pednav/MarkerTrack-v0"
@@ -112,7 +108,7 @@ class MarkerTrackEnv(NativeScalarEnv):
     ## Arguments
     ``gymnasium.make("pednav/MarkerTrack-v0", scenario="random", decision_interval_s=0.5,
     rate_hz=10.0, config=None, render_mode=None)``; ``config`` is a full
-    :class:`pednav_env.envs.marker_core.MarkerTrackConfig`.
+    :class:`pednav_env.envs.marker_config.MarkerTrackConfig`.
 
     ## Vectorized environment
     ``gymnasium.make_vec("pednav/MarkerTrack-v0", num_envs=N,
@@ -174,9 +170,9 @@ class MarkerTrackEnv(NativeScalarEnv):
 
     def record_track(self, info: dict[str, Any]) -> None:
         """Marker tracks of the interval's samples, the last RENDER_WINDOW_S seconds."""
-        active = self.core.interval_active[:, 0]
-        self._track_true.extend(self.core.interval_truth[active, :, 0])
-        self._track_est.extend(self.core.interval_est[active, :, 0])
+        active = self.core.interval_active[0]
+        self._track_true.extend(self.core.interval_truth[0, active])
+        self._track_est.extend(self.core.interval_est[0, active])
         keep = int(RENDER_WINDOW_S * self.config.rate_hz)
         del self._track_true[:-keep], self._track_est[:-keep]
 

@@ -21,7 +21,7 @@ Our scenario (every choice and its reason: docs/REPRODUCTION.md (paper 001)):
 - the EKF of chapter 5 with the simulator's own p⁰, T, d, 0.03 and σ;
 - low-pass: causal first-order Butterworth (RC) filter per coordinate, its
   cut-off minimising the predicted RMS error on the nominal gait
-  (:func:`~pednav_env.nav.marker_ekf.lowpass_cutoff_for_gait`);
+  (:func:`~pednav_env.nav.lowpass.lowpass_cutoff_for_gait`);
 - RMS over all samples of all runs, per coordinate;
   ``improvement_ratio`` = Σ low-pass RMS / Σ EKF RMS over the four
   coordinates, ``ratio_<coord>`` = low-pass RMS / EKF RMS.
@@ -39,13 +39,11 @@ from typing import Any
 
 import numpy as np
 
-from pednav_env.gait.heel_knee import I_OMEGA, HeelKneeConfig, simulate_heel_knee
-from pednav_env.nav.marker_ekf import (
-    MarkerEkfConfig,
-    lowpass_cutoff_for_gait,
-    lowpass_filter,
-    run_marker_ekf,
-)
+from pednav_env.gait.heel_knee import HeelKneeConfig, simulate_heel_knee
+from pednav_env.gait.heel_knee_model import I_OMEGA
+from pednav_env.nav.lowpass import lowpass_cutoff_for_gait, lowpass_filter
+from pednav_env.nav.marker_model import MarkerEkfConfig
+from pednav_env.nav.marker_run import run_marker_ekf
 from pednav_env.reproduce import ReproductionResult, ReproductionRow
 from pednav_env.sensors.uwb import UwbSpec, measure_uwb
 
@@ -85,7 +83,7 @@ class Paper001Scenario:
         Length of each walk (s); K = round(duration · rate) samples.
     lowpass_cutoff_hz : float or None
         Cut-off of the low-pass; None picks
-        :func:`~pednav_env.nav.marker_ekf.lowpass_cutoff_for_gait`.
+        :func:`~pednav_env.nav.lowpass.lowpass_cutoff_for_gait`.
     lowpass_zero_phase : bool
         Use the (non-causal) forward-backward low-pass instead.
     """

@@ -3,7 +3,7 @@
 :class:`FilterpyMarkerEngine` has the engine interface of :class:`MarkerTrackCore`
 over one filterpy EKF per lane, used the ordinary way — ``predict()`` with F = d I
 and Q = Γ Q Γᵀ, ``update(z, HJacobian, Hx, R)`` with the model functions of
-:mod:`pednav_env.nav.marker_ekf` (eq 4.10 / 5.3) on the valid coordinates of each
+:mod:`pednav_env.nav.marker_model` (eq 4.10 / 5.3) on the valid coordinates of each
 sample. :class:`ReferenceMarkerEnv` is one scalar environment around it: the env's
 own episode core (:class:`MarkerTrackCore` with N = 1: the same episodes,
 features, rewards, re-anchoring and divergence checks) with the filterpy engine.
@@ -18,9 +18,10 @@ from gymnasium.utils import seeding
 from numpy.typing import NDArray
 from scipy.linalg import solve_triangular
 
-from pednav_env.envs.marker_core import MarkerTrackConfig, MarkerTrackCore
+from pednav_env.envs.marker_config import MarkerTrackConfig
+from pednav_env.envs.marker_core import MarkerTrackCore
 from pednav_env.envs.marker_track import ENV_ID
-from pednav_env.nav.marker_ekf import (
+from pednav_env.nav.marker_model import (
     DIM_X,
     DIM_Z,
     MarkerEkfConfig,
@@ -49,11 +50,11 @@ class FilterpyMarkerEngine:
         proc = config.process
         self.q0 = proc.process_noise.copy()
         self.r0 = config.meas_std**2
-        self.p0 = config.nominal.vector[:, None].copy()
+        self.p0 = config.nominal.vector
         self.M = config.nominal.shank_length
         self.P0 = np.diag(proc.P0)
-        self.q = np.repeat(self.q0[:, None], n, axis=1)
-        self.r = np.full((DIM_Z, n), self.r0)
+        self.q = np.repeat(self.q0[None], n, axis=0)
+        self.r = np.full((n, DIM_Z), self.r0)
         self.t_anchor = np.zeros(n)
         self.x_anchor = np.zeros(n)
         self.repairs = np.zeros(n, dtype=np.int64)
@@ -66,11 +67,11 @@ class FilterpyMarkerEngine:
 
     @property
     def x(self) -> NDArray[np.float64]:
-        return np.stack([f.x[:, 0] for f in self.filters], axis=1)
+        return np.stack([f.x[:, 0] for f in self.filters])
 
     @property
     def P(self) -> NDArray[np.float64]:
-        return np.ascontiguousarray(np.stack([f.P for f in self.filters], axis=2))
+        return np.stack([f.P for f in self.filters])
 
     def reset(self, lanes: NDArray[np.integer]) -> None:
         for i in lanes:
@@ -81,41 +82,41 @@ class FilterpyMarkerEngine:
 
     def predict(self) -> None:
         for i, f in enumerate(self.filters):
-            f.Q = np.diag(self.q[:, i])
+            f.Q = np.diag(self.q[i])
             f.predict()
 
     def _hx(self, x, tau, offset, rows):
-        return (marker_measurement(self.p0[:, 0] + x[:, 0], tau, self.M) + offset)[rows][:, None]
+        return (marker_measurement(self.p0 + x[:, 0], tau, self.M) + offset)[rows][:, None]
 
     def _H(self, x, tau, rows):
-        return marker_jacobian(self.p0[:, 0] + x[:, 0], tau, self.M)[rows]
+        return marker_jacobian(self.p0 + x[:, 0], tau, self.M)[rows]
 
     def update(self, z, valid, t) -> NDArray[np.float64]:
-        nu = np.zeros((DIM_Z, self.n))
+        nu = np.zeros((self.n, DIM_Z))
         for i, f in enumerate(self.filters):
-            rows = valid[:, i]
+            rows = valid[i]
             if not rows.any():
                 continue
             tau = t[i] - self.t_anchor[i]
             offset = np.array([self.x_anchor[i], 0.0, self.x_anchor[i], 0.0])
             f.update(
-                z[rows, i][:, None],
+                z[i, rows][:, None],
                 self._H,
                 self._hx,
-                R=np.diag(self.r[rows, i]),
+                R=np.diag(self.r[i, rows]),
                 args=(tau, rows),
                 hx_args=(tau, offset, rows),
             )
             L = np.linalg.cholesky(f.S)
-            nu[rows, i] = solve_triangular(L, f.y[:, 0], lower=True)
+            nu[i, rows] = solve_triangular(L, f.y[:, 0], lower=True)
         return nu
 
     def markers(self, t, x=None) -> NDArray[np.float64]:
         x = self.x if x is None else x
-        params = self.p0[:, 0] + np.moveaxis(x, 0, -1)  # (..., N, 6)
-        out = marker_measurement(params, t - self.t_anchor, self.M)  # (..., N, 4)
-        out[..., (0, 2)] += self.x_anchor[..., None]
-        return np.moveaxis(out, -1, 0)
+        lane = (self.n,) + (1,) * (t.ndim - 1)
+        out = marker_measurement(self.p0 + x, t - self.t_anchor.reshape(lane), self.M)
+        out[..., (0, 2)] += self.x_anchor.reshape(lane)[..., None]
+        return out  # (N, ..., 4)
 
     def repair(self) -> NDArray[np.bool_]:
         return ~np.array([np.isfinite(f.P).all() for f in self.filters])
