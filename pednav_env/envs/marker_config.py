@@ -1,5 +1,6 @@
-"""Settings of ``pednav/MarkerTrack-v0`` (paper 001): scenarios and UWB conditions.
+"""Settings of ``pednav/MarkerTrack-v0`` (paper 001): knobs, scenarios, UWB conditions.
 
+:data:`ACTION_KNOBS` are the filter settings the action sets.
 :class:`MarkerTrackConfig` holds what every lane of the marker environment
 shares: the scenario (``"random"`` domain randomisation or ``"paper"``), the
 decision interval, the walk and sensor ranges drawn per episode, the filter at

@@ -29,15 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from pednav_env.checks import require_positive
-from pednav_env.gait.heel_knee_model import (
-    I_A,
-    I_AX,
-    I_AZ,
-    I_CX,
-    I_CZ,
-    I_OMEGA,
-    HeelKneeModel,
-)
+from pednav_env.gait.heel_knee_model import I_A, I_AX, I_AZ, I_CX, I_CZ, I_OMEGA, HeelKneeModel
 from pednav_env.sensors.uwb import UwbSpec
 
 Array = NDArray[np.float64]
@@ -124,21 +116,9 @@ def heel_knee_positions(params: ArrayLike, t: ArrayLike, shank_length: float) ->
 
 
 def marker_measurement(params: ArrayLike, t: ArrayLike, shank_length: float) -> Array:
-    """h(L) of thesis eq 4.12: [x₁, z₁, x₂, z₂] from eq 4.10.
+    """h(L) of thesis eq 4.12: :func:`heel_knee_positions` as [x₁, z₁, x₂, z₂].
 
-    Parameters
-    ----------
-    params : array_like, shape (..., 6)
-        Full parameters p = p⁰ + L (:data:`~pednav_env.gait.heel_knee_model.PARAM_NAMES`).
-    t : array_like, shape (...)
-        kT (s).
-    shank_length : float
-        M (m).
-
-    Returns
-    -------
-    ndarray, shape (..., 4)
-        Heel x, heel z, knee x, knee z (m).
+    Same arguments; returns shape ``(..., 4)``: heel x, heel z, knee x, knee z (m).
     """
     pos = heel_knee_positions(params, t, shank_length)
     return pos.reshape((*pos.shape[:-2], DIM_Z))
@@ -147,19 +127,9 @@ def marker_measurement(params: ArrayLike, t: ArrayLike, shank_length: float) -> 
 def marker_jacobian(params: ArrayLike, t: ArrayLike, shank_length: float) -> Array:
     """H = ∂h/∂L of thesis eq 5.3 (our column order, module docstring).
 
-    Parameters
-    ----------
-    params : array_like, shape (..., 6)
-        Full parameters p = p⁰ + L at the linearisation point.
-    t : array_like, shape (...)
-        kT (s).
-    shank_length : float
-        M (m).
-
-    Returns
-    -------
-    ndarray, shape (..., 4, 6)
-        Rows x₁, z₁, x₂, z₂; columns ΔA_x, ΔA_z, Δc_x, Δc_z, ΔA, Δω.
+    The arguments are those of :func:`marker_measurement`, ``params`` being
+    the linearisation point. Returns shape ``(..., 4, 6)``: rows x₁, z₁, x₂,
+    z₂; columns ΔA_x, ΔA_z, Δc_x, Δc_z, ΔA, Δω.
     """
     p = np.asarray(params, dtype=float)
     tt = np.broadcast_to(np.asarray(t, dtype=float), p.shape[:-1])

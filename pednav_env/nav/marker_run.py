@@ -19,9 +19,12 @@ from pednav_env.nav.marker_ekf import MarkerEkfEngine
 from pednav_env.nav.marker_model import DIM_X, DIM_Z, MarkerEkfConfig
 
 Array = NDArray[np.float64]
+#: A positive multiplier of a noise diagonal: None (1), a scalar, ``(N,)`` (one
+#: per walker) or ``(1, dim)`` / ``(N, dim)`` (per component).
+Scale = ArrayLike | None
 
 
-def _as_walker_array(name: str, value: ArrayLike | None, n: int, dim: int) -> Array:
+def _as_walker_array(name: str, value: Scale, n: int, dim: int) -> Array:
     """A positive multiplier as ``(N, dim)``: scalar, ``(N,)`` per walker, or ``(1|N, dim)``."""
     if value is None:
         return np.ones((n, dim))
@@ -86,21 +89,13 @@ class MarkerEKF:
 
     @property
     def x(self) -> Array:
-        """Estimate, ``(N, 6)`` (the engine's array)."""
+        """Estimate, ``(N, 6)`` (the engine's array: writing into it writes the filter)."""
         return self.engine.x
-
-    @x.setter
-    def x(self, value: ArrayLike) -> None:
-        self.engine.x[...] = np.asarray(value, dtype=float)
 
     @property
     def P(self) -> Array:
-        """Covariance, ``(N, 6, 6)`` (the engine's array)."""
+        """Covariance, ``(N, 6, 6)`` (the engine's array, likewise)."""
         return self.engine.P
-
-    @P.setter
-    def P(self, value: ArrayLike) -> None:
-        self.engine.P[...] = np.asarray(value, dtype=float)
 
     @property
     def repairs(self) -> NDArray[np.int64]:
@@ -112,15 +107,15 @@ class MarkerEKF:
         """Estimated full parameters p⁰ + x̂, shape ``(N, 6)``."""
         return self.config.nominal.vector + self.x
 
-    def process_noise(self, q_scale: ArrayLike | None = None) -> Array:
+    def process_noise(self, q_scale: Scale = None) -> Array:
         """Diagonal of Γ Q Γᵀ times ``q_scale``, shape ``(N, 6)``."""
         return self.engine.q0 * _as_walker_array("q_scale", q_scale, self.num_walkers, DIM_X)
 
-    def measurement_noise(self, r_scale: ArrayLike | None = None) -> Array:
+    def measurement_noise(self, r_scale: Scale = None) -> Array:
         """Diagonal of R times ``r_scale``, shape ``(N, 4)``."""
         return self.engine.r0 * _as_walker_array("r_scale", r_scale, self.num_walkers, DIM_Z)
 
-    def predict(self, q_scale: ArrayLike | None = None) -> None:
+    def predict(self, q_scale: Scale = None) -> None:
         """x⁻ = F x, P⁻ = F P Fᵀ + Γ Q Γᵀ (eqs 4.11, 5.1, 5.2, 5.4; thesis 1.11–1.12).
 
         Parameters
@@ -138,7 +133,7 @@ class MarkerEKF:
         z: ArrayLike,
         t: ArrayLike,
         valid: ArrayLike | None = None,
-        r_scale: ArrayLike | None = None,
+        r_scale: Scale = None,
     ) -> None:
         """Correct with one UWB sample per walker (eqs 4.12, 5.3, 5.5; thesis 1.14–1.18).
 
@@ -231,8 +226,8 @@ def run_marker_ekf(
     config: MarkerEkfConfig,
     z: ArrayLike,
     valid: ArrayLike | None = None,
-    q_scale: ArrayLike | None = None,
-    r_scale: ArrayLike | None = None,
+    q_scale: Scale = None,
+    r_scale: Scale = None,
 ) -> MarkerEkfRun:
     """Filter whole walks sampled at t_k = kT, k = 0 … K−1 (:class:`MarkerEKF`).
 

@@ -38,19 +38,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from pednav_env.checks import require_nonnegative, require_positive, require_probability
+
 Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
-
-
-def _require_nonneg(name: str, value: float) -> None:
-    if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
-        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
-
-
-def _require_prob(name: str, value: float) -> None:
-    _require_nonneg(name, value)
-    if value > 1:
-        raise ValueError(f"{name} must be a probability in [0, 1], got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -94,24 +85,19 @@ class UwbSpec:
     drop_prob: float = 0.0  # thesis: no dropped samples
 
     def __post_init__(self) -> None:
-        if not (
-            isinstance(self.rate_hz, (int, float))
-            and math.isfinite(self.rate_hz)
-            and self.rate_hz > 0
-        ):
-            raise ValueError(f"UwbSpec.rate_hz must be > 0, got {self.rate_hz!r}")
+        require_positive("UwbSpec.rate_hz", self.rate_hz)
         for name in ("noise_std", "nlos_bias_std", "outlier_std"):
-            _require_nonneg(f"UwbSpec.{name}", getattr(self, name))
-        _require_nonneg("UwbSpec.nlos_start_rate_hz", self.nlos_start_rate_hz)
+            require_nonnegative(f"UwbSpec.{name}", getattr(self, name))
+        require_nonnegative("UwbSpec.nlos_start_rate_hz", self.nlos_start_rate_hz)
         for name in ("nlos_drop_prob", "outlier_prob", "drop_prob"):
-            _require_prob(f"UwbSpec.{name}", getattr(self, name))
-        _require_nonneg("UwbSpec.nlos_mean_duration", self.nlos_mean_duration)
+            require_probability(f"UwbSpec.{name}", getattr(self, name))
+        require_nonnegative("UwbSpec.nlos_mean_duration", self.nlos_mean_duration)
         if self.nlos_mean_duration < self.sample_period:
             raise ValueError(
                 "UwbSpec.nlos_mean_duration must be >= one sample period "
                 f"({self.sample_period} s), got {self.nlos_mean_duration!r}"
             )
-        _require_nonneg("UwbSpec.nlos_noise_scale", self.nlos_noise_scale)
+        require_nonnegative("UwbSpec.nlos_noise_scale", self.nlos_noise_scale)
         if self.nlos_noise_scale < 1:
             raise ValueError(
                 f"UwbSpec.nlos_noise_scale must be >= 1, got {self.nlos_noise_scale!r}"
@@ -125,7 +111,7 @@ class UwbSpec:
     def with_noise_std(self, noise_std: float) -> UwbSpec:
         """This spec with σ = ``noise_std`` (equal to ``replace(self, noise_std=...)``;
         only the new σ is checked, the other fields are this valid spec's)."""
-        _require_nonneg("UwbSpec.noise_std", noise_std)
+        require_nonnegative("UwbSpec.noise_std", noise_std)
         out = object.__new__(UwbSpec)
         out.__dict__.update(self.__dict__)
         object.__setattr__(out, "noise_std", noise_std)
