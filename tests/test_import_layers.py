@@ -6,16 +6,17 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-NAV = {"constants", "rotations", "gait", "sensors", "nav"}
+NAV = {"checks", "constants", "rotations", "gait", "sensors", "nav"}
 ENVS = NAV | {"io", "replay", "envs", "pednav_env"}  # pednav_env: the registering __init__
 #: What each unit (a pednav_env subpackage or module, baselines, agents) may import.
 MAY_IMPORT = {
+    "checks": set(),
     "constants": set(),
     "rotations": set(),
-    "gait": {"constants", "rotations", "gait"},
+    "gait": {"checks", "constants", "rotations", "gait"},
     "sensors": NAV - {"nav"},
     "nav": NAV,
-    "io": {"constants", "rotations", "sensors", "io"},
+    "io": {"checks", "constants", "rotations", "sensors", "io"},
     "replay": NAV | {"io", "replay"},
     "reproduce": NAV | {"reproduce"},
     "calibration": NAV | {"io", "calibration"},

@@ -11,9 +11,10 @@ paper-001 reproduction), repaired once per decision interval.
 Episode (:mod:`pednav_env.envs.marker_episode`): a walk of the heel–knee
 model (thesis eqs 4.1–4.11, :mod:`pednav_env.gait.heel_knee`) seen by a UWB
 sensor (:mod:`pednav_env.sensors.uwb`), both drawn from the lane's generator;
-settings in :mod:`pednav_env.envs.marker_config`. A decision interval is ``decision_interval_s`` of UWB data (default 0.5 s =
-5 samples at 10 Hz). The action sets the filter's knobs for the next interval
-as ``base · span ** a`` (log scale; a = 0 is the paper's EKF).
+settings in :mod:`pednav_env.envs.marker_config`. A decision interval is
+``decision_interval_s`` of UWB data (default 0.5 s = 5 samples at 10 Hz). The
+action sets the filter's knobs for the next interval as ``base · span ** a``
+(log scale; a = 0 is the paper's EKF).
 
 Two things the thesis does not need for its 10 s walks are handled here:
 
