@@ -111,13 +111,12 @@ class Engine(Protocol):
 EngineFactory = Callable[[MarkerEkfConfig, int], Engine]
 
 
-def _sum_in_order(a: Array, axis: int) -> Array:
-    """Σ over ``axis``, added strictly in index order (the same numbers for any
+def _sum_in_order(a: Array) -> Array:
+    """Σ over the first axis, added strictly in order (the same numbers for any
     lane count and interval length; numpy's pairwise reductions associate
     differently from eight terms on)."""
-    rows = np.moveaxis(a, axis, 0)
-    out = rows[0].copy()
-    for row in rows[1:]:
+    out = a[0].copy()
+    for row in a[1:]:
         out += row
     return out
 
@@ -131,6 +130,13 @@ class MarkerTrackCore:
     ``engine_factory`` builds the filter (default
     :class:`~pednav_env.nav.marker_ekf.MarkerEkfEngine`);
     the benchmark's reference passes a filterpy-backed one.
+
+    Everything the core takes and returns is lanes first, as the engine's
+    state. The scratch arrays of one interval (``interval_est``,
+    ``interval_truth``: ``(k, 4, N)``; ``interval_active``: ``(k, N)``) are
+    sample- and coordinate-major, so that the interval's sums and features run
+    along the lanes (numpy reduces a short last axis row by row, which is
+    several times slower at N = 256).
     """
 
     def __init__(
@@ -176,10 +182,10 @@ class MarkerTrackCore:
             [hi for _, _, hi in OBS_FEATURES] + [1.0] * config.action_dim, dtype=np.float32
         )
         self.obs = np.zeros((n, len(OBS_FEATURES) + config.action_dim), dtype=np.float32)
-        self._obs_low64 = self.obs_low.astype(np.float64)
-        self._obs_high64 = self.obs_high.astype(np.float64)
+        self._obs_low64 = self.obs_low.astype(np.float64)[:, None]
+        self._obs_high64 = self.obs_high.astype(np.float64)[:, None]
         self._prior_obs: NDArray[np.float32] | None = None
-        self._abs_p0 = np.abs(config.filter.nominal.vector)
+        self._abs_p0 = np.abs(config.filter.nominal.vector)[:, None]
         self._log10_abs_p0 = np.log10(self._abs_p0)
         self._qgroup = np.asarray(Q_GROUP)
         self._knob_base = np.array([base for _, base, _, _ in ACTION_KNOBS])
@@ -189,10 +195,10 @@ class MarkerTrackCore:
         self._q_rest = self.engine.q0 * rest[self._qgroup]
         self._r_rest = self.engine.r0 * rest[3]
         self._scale_buf = np.empty((n, config.action_dim))
-        #: The last interval: estimates and truth (N, k, 4), samples in the walk (N, k).
-        self.interval_est = np.zeros((n, self.k, DIM_Z))
-        self.interval_truth = np.zeros((n, self.k, DIM_Z))
-        self.interval_active = np.zeros((n, self.k), dtype=bool)
+        #: The last interval: estimates and truth (k, 4, N), samples in the walk (k, N).
+        self.interval_est = np.zeros((self.k, DIM_Z, n))
+        self.interval_truth = np.zeros((self.k, DIM_Z, n))
+        self.interval_active = np.zeros((self.k, n), dtype=bool)
 
     # ------------------------------------------------------------------ reset
     def reset_lanes(self, lanes: NDArray[np.integer], rngs: list[np.random.Generator]) -> None:
@@ -272,32 +278,32 @@ class MarkerTrackCore:
         used = np.clip(self.length - base, 0, k)
         sl = slice(self.g % self.C, self.g % self.C + k)
         self.g += k
-        sidx = base[:, None] + np.arange(k)  # (N, k)
-        active = (sidx < self.length[:, None]) & (sidx >= 0)
-        z = self.zbuf[:, sl]  # (N, k, 4)
-        truth = self.interval_truth  # (N, k, 4), the last interval's truth
-        truth[...] = self.tbuf[:, sl]
-        valid = np.empty((self.n, k, DIM_Z), dtype=bool)
-        np.logical_and(self.vbuf[:, sl], active[:, :, None], out=valid)
+        sidx = base[None, :] + np.arange(k)[:, None]  # (k, N)
+        active = (sidx < self.length) & (sidx >= 0)
+        z = np.ascontiguousarray(self.zbuf[:, sl].transpose(1, 2, 0))  # (k, 4, N)
+        truth = self.interval_truth  # (k, 4, N), the last interval's truth
+        truth[...] = self.tbuf[:, sl].transpose(1, 2, 0)
+        valid = np.empty((k, DIM_Z, self.n), dtype=bool)
+        np.logical_and(self.vbuf[:, sl].transpose(1, 2, 0), active[:, None, :], out=valid)
         times = sidx * self.T  # kT
         fresh = np.flatnonzero(base == 0)
-        nu = np.empty((self.n, k, DIM_Z))
-        xs = np.empty((self.n, k, DIM_X))  # posterior after each sample
+        nu = np.empty((k, DIM_Z, self.n))
+        xs = np.empty((k, self.n, DIM_X))  # posterior after each sample
         with np.errstate(all="ignore"):  # diverging lanes are detected below
             for j in range(k):
                 e.predict()
                 if j == 0 and fresh.size:  # an episode's first sample: the prior
                     e.reset(fresh)
-                nu[:, j] = e.update(z[:, j], valid[:, j], times[:, j])  # copies the buffer
-                xs[:, j] = e.x
+                nu[j] = e.update(z[j].T, valid[j].T, times[j]).T  # copies the buffer
+                xs[j] = e.x
             # estimated markers h(x̂ₖ) of all the interval's samples at once (the
             # anchor only moves between intervals)
-            est = self.interval_est
-            est[...] = e.markers(times, xs)  # (N, k, 4)
+            est = self.interval_est  # (k, 4, N)
+            est[...] = e.markers(times.T, xs.transpose(1, 0, 2)).transpose(1, 2, 0)
             nonfinite = e.repair()
-            sq = (est - truth) ** 2 * active[:, :, None]  # (N, k, 4)
-            coord_ms = _sum_in_order(sq, axis=1) / np.maximum(used, 1)[:, None]  # (N, 4)
-            err = np.sqrt(coord_ms.mean(axis=1))
+            sq = (est - truth) ** 2 * active[:, None, :]  # (k, 4, N)
+            coord_ms = _sum_in_order(sq) / np.maximum(used, 1)  # (4, N)
+            err = np.sqrt(coord_ms.mean(axis=0))
         self.interval_active[:] = active
         err = np.where(used > 0, err, self.last_error)
         self.cursor += used
@@ -306,7 +312,7 @@ class MarkerTrackCore:
         lanes = self.lanes
         self.distance = np.where(
             used > 0,
-            truth[lanes, j_last, 0] - self.x_start,
+            truth[j_last, 0, lanes] - self.x_start,
             self.distance,
         )
         # divergence and lock loss (module docstring)
@@ -329,14 +335,14 @@ class MarkerTrackCore:
         interval = {"nu": nu, "valid": valid, "used": used}
         self.obs = self._features(slice(None), interval)
         info = {
-            "markers_true": truth[lanes, j_last],
-            "markers_est": est[lanes, j_last],
+            "markers_true": truth[j_last, :, lanes],
+            "markers_est": est[j_last, :, lanes],
             "error": err_safe,
-            "error_by_coord": np.sqrt(coord_ms),
+            "error_by_coord": np.sqrt(coord_ms.T),
             "distance": self.distance.copy(),
             "samples": used,
             # active coordinates not valid: 4 per active sample minus the valid ones
-            "dropped_samples": (4 * active.sum(axis=1) - valid.sum(axis=(1, 2))) // 2,
+            "dropped_samples": (4 * active.sum(axis=0) - valid.sum(axis=(0, 1))) // 2,
             "reanchors": self.reanchors.copy(),
             "clipped_actions": self.clipped.copy(),
             "covariance_repairs": e.repairs.copy(),
@@ -376,29 +382,29 @@ class MarkerTrackCore:
         """Observation rows of ``lanes`` (see OBS_FEATURES and the env docstring)."""
         e = self.engine
         b = self.n if isinstance(lanes, slice) else len(lanes)
-        out = np.zeros((b, len(OBS_FEATURES) + self.config.action_dim))
+        out = np.zeros((len(OBS_FEATURES) + self.config.action_dim, b))  # features × lanes
         with np.errstate(all="ignore"):
             if interval is not None:  # right after reset: no data yet (zeros)
                 nu, valid, used = interval["nu"], interval["valid"], interval["used"]
-                nu2 = nu * nu  # (N, k, 4); ν = 0 where skipped
-                nvalid = valid.sum(axis=2)  # (N, k)
-                nis = nu2.sum(axis=2)
+                nu2 = nu * nu  # (k, 4, N); ν = 0 where skipped
+                nvalid = valid.sum(axis=1)  # (k, N)
+                nis = nu2.sum(axis=1)
                 lnis = np.log1p(nis)  # 0 where no update
-                n_upd = np.maximum((nvalid > 0).sum(axis=1), 1)
-                cnt = valid.sum(axis=1)  # (N, 4)
-                out[:, 0] = 1.0 - cnt.sum(axis=1) / np.maximum(4 * used, 1)
-                out[:, 1] = _sum_in_order(lnis, axis=1) / n_upd
-                out[:, 2] = lnis.max(axis=1)
-                out[:, 3] = (nis > CHI2_99[nvalid]).sum(axis=1) / n_upd  # χ²(0) = inf
+                n_upd = np.maximum((nvalid > 0).sum(axis=0), 1)
+                cnt = valid.sum(axis=0)  # (4, N)
+                out[0] = 1.0 - cnt.sum(axis=0) / np.maximum(4 * used, 1)
+                out[1] = _sum_in_order(lnis) / n_upd
+                out[2] = lnis.max(axis=0)
+                out[3] = (nis > CHI2_99[nvalid]).sum(axis=0) / n_upd  # χ²(0) = inf
                 cnt = np.maximum(cnt, 1)
-                out[:, 4:8] = np.sqrt(_sum_in_order(nu2, axis=1) / cnt)
-                out[:, 8:12] = _sum_in_order(nu, axis=1) / cnt
-            diag = e.P.reshape(-1, DIM_X * DIM_X)[lanes, :: DIM_X + 1]
-            out[:, 12:18] = 0.5 * np.log10(diag) - self._log10_abs_p0
-            out[:, 18:24] = e.x[lanes] / self._abs_p0
+                out[4:8] = np.sqrt(_sum_in_order(nu2) / cnt)
+                out[8:12] = _sum_in_order(nu) / cnt
+            diag = e.P.reshape(-1, DIM_X * DIM_X)[lanes, :: DIM_X + 1].T
+            out[12:18] = 0.5 * np.log10(diag) - self._log10_abs_p0
+            out[18:24] = e.x[lanes].T / self._abs_p0
             t_last = np.maximum(self.cursor[lanes] - 1, 0) * self.T
-            out[:, 24] = t_last - e.t_anchor[lanes]
-            out[:, 25:] = self.action[lanes]
+            out[24] = t_last - e.t_anchor[lanes]
+            out[25:] = self.action[lanes].T
             # Clip to the bounds, NaN → 0: what nan_to_num and then clipping the
             # float32 cast gives (±inf end at a bound either way, 0 is inside every
             # range; the bounds are float32 numbers and rounding keeps the order).
@@ -407,7 +413,7 @@ class MarkerTrackCore:
             nan = np.isnan(out)
             if nan.any():
                 out[nan] = 0.0
-        return out.astype(np.float32)
+        return out.T.astype(np.float32)
 
 
 __all__ = [

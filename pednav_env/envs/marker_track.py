@@ -170,9 +170,9 @@ class MarkerTrackEnv(NativeScalarEnv):
 
     def record_track(self, info: dict[str, Any]) -> None:
         """Marker tracks of the interval's samples, the last RENDER_WINDOW_S seconds."""
-        active = self.core.interval_active[0]
-        self._track_true.extend(self.core.interval_truth[0, active])
-        self._track_est.extend(self.core.interval_est[0, active])
+        active = self.core.interval_active[:, 0]
+        self._track_true.extend(self.core.interval_truth[active, :, 0])
+        self._track_est.extend(self.core.interval_est[active, :, 0])
         keep = int(RENDER_WINDOW_S * self.config.rate_hz)
         del self._track_true[:-keep], self._track_est[:-keep]
 

@@ -104,8 +104,10 @@ class MarkerEkfEngine:
         self.config = config
         self.n = n
         proc = config.process
-        self.F = proc.F.copy()  # (6,), eq 5.1
-        self.FF = proc.F[:, None] * proc.F[None, :]
+        # F x and F P Fᵀ (eq 5.1, F diagonal) as elementwise products with F and
+        # F Fᵀ repeated per lane, so that predict sweeps the arrays in one pass
+        self._F = np.repeat(proc.F[None], n, axis=0)
+        self._FF = np.repeat((proc.F[:, None] * proc.F[None, :])[None], n, axis=0)
         self.q0 = proc.process_noise.copy()  # diagonal of Γ Q Γᵀ, eqs 5.2, 5.4
         self.r0 = config.meas_std**2  # eq 5.5
         self.p0 = config.nominal.vector  # (6,)
@@ -118,10 +120,10 @@ class MarkerEkfEngine:
         self.t_anchor = np.zeros(n)
         self.x_anchor = np.zeros(n)
         self.repairs = np.zeros(n, dtype=np.int64)
-        self._H = np.zeros((n, DIM_Z, DIM_X))
-        self._H[:, 1, I_CZ] = self._H[:, 3, I_CZ] = 1.0  # ∂z/∂Δc_z
-        self._W = np.zeros((n, DIM_Z, DIM_X))
-        self._nu = np.zeros((n, DIM_Z))
+        self._H = np.zeros((DIM_Z, DIM_X, n))  # working arrays, component-major
+        self._H[1, I_CZ] = self._H[3, I_CZ] = 1.0  # ∂z/∂Δc_z
+        self._W = np.zeros((DIM_Z, DIM_X, n))
+        self._nu = np.zeros((DIM_Z, n))
 
     def reset(self, lanes: NDArray[np.integer]) -> None:
         """Initial estimate x̂ = 0, P0 (eqs 5.7, 5.8) and anchor 0 in ``lanes``."""
@@ -132,8 +134,8 @@ class MarkerEkfEngine:
 
     def predict(self) -> None:
         """x⁻ = F x, P⁻ = F P Fᵀ + Γ Q Γᵀ (thesis eqs 1.11, 1.12, 5.1–5.4)."""
-        self.x *= self.F
-        self.P *= self.FF
+        self.x *= self._F
+        self.P *= self._FF
         self.P.reshape(self.n, DIM_X * DIM_X)[:, :: DIM_X + 1] += self.q
 
     def markers(self, t: Array, x: Array | None = None) -> Array:
@@ -171,60 +173,65 @@ class MarkerEkfEngine:
         -------
         ndarray, shape (N, 4)
             Normalised sequential innovations ν (0 where skipped); Σ ν² is the
-            NIS yᵀ S⁻¹ y. An internal buffer, overwritten by the next call.
+            NIS yᵀ S⁻¹ y. A view of an internal buffer, overwritten by the next
+            call.
         """
-        p = self.p0 + self.x
+        # Working arrays are component-major, (…, N), so that every operation
+        # below sweeps all lanes contiguously (about twice as fast at N = 256 as
+        # on (N, 4, 6) slices); the state stays lanes first.
+        p = self.p0[:, None] + self.x.T
         tau = t - self.t_anchor
-        phase = p[:, I_OMEGA] * tau
+        phase = p[I_OMEGA] * tau
         s = np.sin(phase)
         ctau = np.cos(phase) * tau
-        beta = p[:, I_A] * s
+        beta = p[I_A] * s
         Msb = self.M * np.sin(beta)
         Mcb = self.M * np.cos(beta)
-        H = self._H  # eq 5.3, columns in eq 4.9 order
-        H[:, 0, I_AX] = s
-        H[:, 0, I_CX] = tau
-        H[:, 0, I_OMEGA] = p[:, I_AX] * ctau
-        H[:, 1, I_AZ] = s
-        H[:, 1, I_OMEGA] = p[:, I_AZ] * ctau
-        H[:, 2, I_AX] = s
-        H[:, 2, I_CX] = tau
-        H[:, 2, I_A] = Mcb * s
-        dbeta = p[:, I_A] * ctau
-        H[:, 2, I_OMEGA] = H[:, 0, I_OMEGA] + Mcb * dbeta
-        H[:, 3, I_AZ] = s
-        H[:, 3, I_A] = -Msb * s
-        H[:, 3, I_OMEGA] = H[:, 1, I_OMEGA] - Msb * dbeta
-        hx1 = self.x_anchor + p[:, I_CX] * tau + p[:, I_AX] * s
-        hz1 = p[:, I_CZ] + p[:, I_AZ] * s
-        y = np.empty((self.n, DIM_Z))
-        y[:, 0] = z[:, 0] - hx1
-        y[:, 1] = z[:, 1] - hz1
-        y[:, 2] = z[:, 2] - (hx1 + Msb)
-        y[:, 3] = z[:, 3] - (hz1 + Mcb)
+        H = self._H  # eq 5.3, columns in eq 4.9 order, (4, 6, N)
+        H[0, I_AX] = s
+        H[0, I_CX] = tau
+        H[0, I_OMEGA] = p[I_AX] * ctau
+        H[1, I_AZ] = s
+        H[1, I_OMEGA] = p[I_AZ] * ctau
+        H[2, I_AX] = s
+        H[2, I_CX] = tau
+        H[2, I_A] = Mcb * s
+        dbeta = p[I_A] * ctau
+        H[2, I_OMEGA] = H[0, I_OMEGA] + Mcb * dbeta
+        H[3, I_AZ] = s
+        H[3, I_A] = -Msb * s
+        H[3, I_OMEGA] = H[1, I_OMEGA] - Msb * dbeta
+        hx1 = self.x_anchor + p[I_CX] * tau + p[I_AX] * s
+        hz1 = p[I_CZ] + p[I_AZ] * s
+        y = np.empty((DIM_Z, self.n))
+        y[0] = z[:, 0] - hx1
+        y[1] = z[:, 1] - hz1
+        y[2] = z[:, 2] - (hx1 + Msb)
+        y[3] = z[:, 3] - (hz1 + Mcb)
         if valid.all():
             Hm = H
         else:
-            Hm = H * valid[:, :, None]
-            y *= valid
-        # P hₘ for every row m. Every reduction here sums at most 6 terms along
-        # one axis, which numpy adds in index order for any N, so a lane's
-        # numbers do not depend on the batch size (bit for bit).
-        PH = np.einsum("nmj,nji->nmi", Hm, self.P)
+            Hm = H * valid.T[:, None, :]
+            y *= valid.T
+        # P hₘ for every row m. Every reduction here sums at most 6 terms along a
+        # component axis, which numpy adds in index order for any N (also in this
+        # einsum), so a lane's numbers do not depend on the batch size (bit for bit).
+        P = np.ascontiguousarray(self.P.transpose(1, 2, 0))  # (6, 6, N)
+        PH = np.einsum("mjn,jin->min", Hm, P)
         W, nu = self._W, self._nu
         for m in range(DIM_Z):
-            s_m = (Hm[:, m] * PH[:, m]).sum(axis=1) + self.r[:, m]
+            s_m = (Hm[m] * PH[m]).sum(axis=0) + self.r[:, m]
             inv = 1.0 / np.sqrt(s_m)
-            np.multiply(PH[:, m], inv[:, None], out=W[:, m])
-            np.multiply(y[:, m], inv, out=nu[:, m])
+            np.multiply(PH[m], inv, out=W[m])
+            np.multiply(y[m], inv, out=nu[m])
             if m < DIM_Z - 1:  # rows after m see the covariance and state after row m
-                dots = (W[:, m, None, :] * Hm[:, m + 1 :]).sum(axis=2)
-                PH[:, m + 1 :] -= W[:, m, None, :] * dots[:, :, None]
-                y[:, m + 1 :] -= dots * nu[:, m, None]
-        self.x += (W * nu[:, :, None]).sum(axis=1)
-        # Σₘ wₘ wₘᵀ per lane as one batched (6×4)(4×6) product
-        self.P -= W.transpose(0, 2, 1) @ W
-        return nu
+                dots = (W[m] * Hm[m + 1 :]).sum(axis=1)
+                PH[m + 1 :] -= W[m][None, :, :] * dots[:, None, :]
+                y[m + 1 :] -= dots * nu[m]
+        self.x += (W * nu[:, None, :]).sum(axis=0).T
+        # Σₘ wₘ wₘᵀ per lane as one batched (6×4)(4×6) product, lanes first
+        self.P -= W.transpose(2, 1, 0) @ W.transpose(2, 0, 1)
+        return nu.T
 
     def repair(self) -> BoolArray:
         """Floor the eigenvalues of lanes whose P fails the Cholesky-pivot test.
@@ -240,9 +247,10 @@ class MarkerEkfEngine:
             True where P is not finite.
         """
         P = self.P
-        diag = P.reshape(self.n, DIM_X * DIM_X)[:, :: DIM_X + 1]
-        finite = np.isfinite(P).all(axis=(1, 2))
-        scale = np.max(diag, axis=1)
+        # the checks over a lane's entries run along the lanes (component-major copy)
+        entries = np.ascontiguousarray(P.reshape(self.n, DIM_X * DIM_X).T)  # (36, N)
+        finite = np.isfinite(entries).all(axis=0)
+        scale = np.max(entries[:: DIM_X + 1], axis=0)
         floor = self.config.eig_floor * np.maximum(scale, np.finfo(float).tiny)
         try:  # fast path: LAPACK over all lanes; its pivots are L_jj²
             L = np.linalg.cholesky(P)
