@@ -19,30 +19,19 @@ from gymnasium.envs.registration import register, registry
 
 __version__ = "0.1.0"
 
-if "pednav/FootZupt-v0" not in registry:
-    register(
-        id="pednav/FootZupt-v0",
-        entry_point="pednav_env.envs.foot_zupt:FootZuptEnv",
-        vector_entry_point="pednav_env.envs.foot_zupt:FootZuptVectorEnv",
-    )
+#: (id, module under pednav_env.envs, class name of the scalar env); the vector
+#: env is that class name with ``Vector`` before ``Env``.
+ENVS = (
+    ("pednav/FootZupt-v0", "foot_zupt", "FootZuptEnv"),
+    ("pednav/MarkerTrack-v0", "marker_track", "MarkerTrackEnv"),
+    ("pednav/WaistStep-v0", "waist_step", "WaistStepEnv"),
+    ("pednav/FootZuptReplay-v0", "foot_replay", "FootZuptReplayEnv"),
+)
 
-if "pednav/MarkerTrack-v0" not in registry:
-    register(
-        id="pednav/MarkerTrack-v0",
-        entry_point="pednav_env.envs.marker_track:MarkerTrackEnv",
-        vector_entry_point="pednav_env.envs.marker_track:MarkerTrackVectorEnv",
-    )
-
-if "pednav/WaistStep-v0" not in registry:
-    register(
-        id="pednav/WaistStep-v0",
-        entry_point="pednav_env.envs.waist_step:WaistStepEnv",
-        vector_entry_point="pednav_env.envs.waist_step:WaistStepVectorEnv",
-    )
-
-if "pednav/FootZuptReplay-v0" not in registry:
-    register(
-        id="pednav/FootZuptReplay-v0",
-        entry_point="pednav_env.envs.foot_replay:FootZuptReplayEnv",
-        vector_entry_point="pednav_env.envs.foot_replay:FootZuptReplayVectorEnv",
-    )
+for _env_id, _module, _cls in ENVS:
+    if _env_id not in registry:
+        register(
+            id=_env_id,
+            entry_point=f"pednav_env.envs.{_module}:{_cls}",
+            vector_entry_point=f"pednav_env.envs.{_module}:{_cls.removesuffix('Env')}VectorEnv",
+        )

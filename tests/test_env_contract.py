@@ -188,17 +188,18 @@ def test_vector_lanes_equal_scalar_envs_bit_for_bit(env_id):
 
 
 @pytest.mark.parametrize(
-    "bad", ["short", "batched", "nan", "inf", "-inf"], ids=lambda b: f"action_{b}"
+    "bad", ["short", "batched", "nan", "inf", "-inf", "text"], ids=lambda b: f"action_{b}"
 )
 def test_bad_actions_raise_with_the_env_name(env_id, bad):
-    """Wrong shape or non-finite actions are refused, by the scalar env and by the
-    vector env, with a ValueError naming the env."""
+    """Wrong shape, non-finite or non-numeric actions are refused, by the scalar env
+    and by the vector env, with a ValueError naming the env."""
     env = make(env_id).unwrapped
     k = env.action_space.shape[0]
     value = {"nan": np.nan, "inf": np.inf, "-inf": -np.inf}
     action = {
         "short": np.zeros(k - 1),
         "batched": np.zeros((1, k)),
+        "text": np.array(["a"] * k, dtype=object),
     }.get(bad, np.where(np.arange(k) == 1, value.get(bad, 0.0), 0.0))
     env.reset(seed=0)
     with pytest.raises(ValueError, match=env_id):

@@ -5,16 +5,42 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from gymnasium.vector import AutoresetMode
 
 from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
 from pednav_env.envs.foot_zupt import FootZuptEnv, FootZuptVectorEnv
-from pednav_env.envs.native import lane_spaces, make_config
 
 ENV_ID = "pednav/FootZuptReplay-v0"
 
 
-class FootZuptReplayEnv(FootZuptEnv):
+class ReplayFront:
+    """What the replay env's scalar and vector classes add to the foot env's:
+    the replay core and config. After construction ``config`` is the core's
+    filter-side :class:`~pednav_env.envs.foot_core.FootZuptConfig` (what the
+    foot env's code reads) and ``replay_config`` the :class:`FootReplayConfig`."""
+
+    env_id = ENV_ID
+    core_cls = FootReplayCore
+    config_cls = FootReplayConfig
+    arguments = ("data_dir", "decision_interval_s", "tune_min_stance")
+    core: FootReplayCore
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.replay_config: FootReplayConfig = self.config
+        self.config = self.core.config
+
+    @classmethod
+    def build_config(cls, config: Any, arguments: dict[str, Any]) -> Any:
+        data_dir = arguments.get("data_dir")
+        if data_dir is not None:  # a path-like is kept as its string
+            arguments = {**arguments, "data_dir": str(data_dir)}
+        return super().build_config(config, arguments)  # type: ignore[misc]
+
+    def action_dim(self) -> int:
+        return int(self.core.config.action_dim)
+
+
+class FootZuptReplayEnv(ReplayFront, FootZuptEnv):
     """
     ## Description
     :class:`pednav_env.envs.foot_zupt.FootZuptEnv` with recorded walks in
@@ -81,34 +107,6 @@ class FootZuptReplayEnv(FootZuptEnv):
     - v0: initial version.
     """
 
-    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 4}
-
-    def __init__(
-        self,
-        data_dir: str | None = None,
-        decision_interval_s: float | None = None,
-        tune_min_stance: bool | None = None,
-        config: FootReplayConfig | None = None,
-        render_mode: str | None = None,
-    ) -> None:
-        self.replay_config = make_config(
-            FootReplayConfig,
-            config,
-            data_dir=None if data_dir is None else str(data_dir),
-            decision_interval_s=decision_interval_s,
-            tune_min_stance=tune_min_stance,
-        )
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"{ENV_ID}: render_mode must be one of "
-                f"{self.metadata['render_modes']}, got {render_mode!r}"
-            )
-        self.render_mode = render_mode
-        self.core = FootReplayCore(self.replay_config, 1, ENV_ID)
-        self.config = self.core.config
-        self.action_space, self.observation_space = lane_spaces(self.core, self.config.action_dim)
-        self._figure = None
-
     def lane_info(self) -> dict[str, Any]:
         return {
             **super().lane_info(),
@@ -117,32 +115,9 @@ class FootZuptReplayEnv(FootZuptEnv):
         }
 
 
-class FootZuptReplayVectorEnv(FootZuptVectorEnv):
+class FootZuptReplayVectorEnv(ReplayFront, FootZuptVectorEnv):
     """Native vector version of :class:`FootZuptReplayEnv` (see its docstring):
     one batched filter for all ``num_envs`` trials, SAME_STEP autoreset."""
-
-    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
-
-    def __init__(
-        self,
-        num_envs: int = 1,
-        data_dir: str | None = None,
-        decision_interval_s: float | None = None,
-        tune_min_stance: bool | None = None,
-        config: FootReplayConfig | None = None,
-        render_mode: str | None = None,
-    ) -> None:
-        self.reject_render_mode(ENV_ID, render_mode)
-        self.replay_config = make_config(
-            FootReplayConfig,
-            config,
-            data_dir=None if data_dir is None else str(data_dir),
-            decision_interval_s=decision_interval_s,
-            tune_min_stance=tune_min_stance,
-        )
-        core = FootReplayCore(self.replay_config, int(num_envs), ENV_ID)
-        self.config = core.config
-        self.attach_core(core, self.config.action_dim)
 
     def lane_info(self) -> dict[str, np.ndarray]:
         info = super().lane_info()

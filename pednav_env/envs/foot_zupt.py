@@ -13,7 +13,7 @@ from pednav_env.envs.foot_core import (
     FootZuptConfig,
     FootZuptCore,
 )
-from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces, make_config
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
 
 ENV_ID = "pednav/FootZupt-v0"
 
@@ -132,30 +132,12 @@ class FootZuptEnv(NativeScalarEnv):
     - v0: initial version.
     """
 
+    env_id = ENV_ID
+    core_cls = FootZuptCore
+    config_cls = FootZuptConfig
+    arguments = ("scenario", "decision_interval_s", "rate_hz", "tune_min_stance")
     track_dim = 3
     estimate_label = "ZUPT-UKF"
-
-    def __init__(
-        self,
-        scenario: str | None = None,
-        decision_interval_s: float | None = None,
-        rate_hz: float | None = None,
-        tune_min_stance: bool | None = None,
-        config: FootZuptConfig | None = None,
-        render_mode: str | None = None,
-    ) -> None:
-        self.config = make_config(
-            FootZuptConfig,
-            config,
-            scenario=scenario,
-            decision_interval_s=decision_interval_s,
-            rate_hz=rate_hz,
-            tune_min_stance=tune_min_stance,
-        )
-        self.render_mode = render_mode
-        self.core = FootZuptCore(self.config, 1, ENV_ID)
-        self.check_render_mode(render_mode)
-        self.action_space, self.observation_space = lane_spaces(self.core, self.config.action_dim)
 
     def lane_info(self) -> dict[str, Any]:
         return {"imu_grade": self.core.grade[0]}
@@ -165,26 +147,10 @@ class FootZuptVectorEnv(NativeVectorEnv):
     """Native vector version of :class:`FootZuptEnv` (see its docstring):
     one batched filter for all ``num_envs`` walks, SAME_STEP autoreset."""
 
-    def __init__(
-        self,
-        num_envs: int = 1,
-        scenario: str | None = None,
-        decision_interval_s: float | None = None,
-        rate_hz: float | None = None,
-        tune_min_stance: bool | None = None,
-        config: FootZuptConfig | None = None,
-        render_mode: str | None = None,
-    ) -> None:
-        self.reject_render_mode(ENV_ID, render_mode)
-        self.config = make_config(
-            FootZuptConfig,
-            config,
-            scenario=scenario,
-            decision_interval_s=decision_interval_s,
-            rate_hz=rate_hz,
-            tune_min_stance=tune_min_stance,
-        )
-        self.attach_core(FootZuptCore(self.config, int(num_envs), ENV_ID), self.config.action_dim)
+    env_id = ENV_ID
+    core_cls = FootZuptCore
+    config_cls = FootZuptConfig
+    arguments = FootZuptEnv.arguments
 
     def lane_info(self) -> dict[str, np.ndarray]:
         return {"imu_grade": np.array(self.core.grade, dtype=object)}

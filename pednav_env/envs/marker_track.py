@@ -8,7 +8,7 @@ import numpy as np
 
 from pednav_env.envs.marker_config import ACTION_KNOBS, MarkerTrackConfig
 from pednav_env.envs.marker_core import OBS_FEATURES, MarkerTrackCore
-from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces, make_config
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
 
 ENV_ID = "pednav/MarkerTrack-v0"
 #: Seconds of track shown by :meth:`MarkerTrackEnv.render`.
@@ -142,28 +142,12 @@ class MarkerTrackEnv(NativeScalarEnv):
     - v0: initial version.
     """
 
+    env_id = ENV_ID
+    core_cls = MarkerTrackCore
+    config_cls = MarkerTrackConfig
+    arguments = ("scenario", "decision_interval_s", "rate_hz")
     figure_size = (6.0, 4.0)
     track_dim = 4
-
-    def __init__(
-        self,
-        scenario: str | None = None,
-        decision_interval_s: float | None = None,
-        rate_hz: float | None = None,
-        config: MarkerTrackConfig | None = None,
-        render_mode: str | None = None,
-    ) -> None:
-        self.config = make_config(
-            MarkerTrackConfig,
-            config,
-            scenario=scenario,
-            decision_interval_s=decision_interval_s,
-            rate_hz=rate_hz,
-        )
-        self.render_mode = render_mode
-        self.core = MarkerTrackCore(self.config, 1, ENV_ID)
-        self.check_render_mode(render_mode)
-        self.action_space, self.observation_space = lane_spaces(self.core, self.config.action_dim)
 
     def lane_info(self) -> dict[str, Any]:
         return {"uwb_condition": self.core.condition[0]}
@@ -193,25 +177,10 @@ class MarkerTrackVectorEnv(NativeVectorEnv):
     """Native vector version of :class:`MarkerTrackEnv` (see its docstring):
     one batched filter for all ``num_envs`` walks, SAME_STEP autoreset."""
 
-    def __init__(
-        self,
-        num_envs: int = 1,
-        scenario: str | None = None,
-        decision_interval_s: float | None = None,
-        rate_hz: float | None = None,
-        config: MarkerTrackConfig | None = None,
-        render_mode: str | None = None,
-    ) -> None:
-        self.reject_render_mode(ENV_ID, render_mode)
-        self.config = make_config(
-            MarkerTrackConfig,
-            config,
-            scenario=scenario,
-            decision_interval_s=decision_interval_s,
-            rate_hz=rate_hz,
-        )
-        core = MarkerTrackCore(self.config, int(num_envs), ENV_ID)
-        self.attach_core(core, self.config.action_dim)
+    env_id = ENV_ID
+    core_cls = MarkerTrackCore
+    config_cls = MarkerTrackConfig
+    arguments = MarkerTrackEnv.arguments
 
     def lane_info(self) -> dict[str, np.ndarray]:
         return {"uwb_condition": self.core.condition.copy()}

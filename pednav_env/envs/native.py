@@ -1,13 +1,19 @@
 """What the native environments share.
 
+An env module is its manual (the class docstring) plus a few lines: a subclass
+of :class:`NativeScalarEnv` and of :class:`NativeVectorEnv` naming its
+``env_id``, its core class ``core_cls`` (a :class:`pednav_env.envs.spec.Core`),
+its config class ``config_cls`` and the config fields its constructor takes as
+keyword ``arguments``. Both constructors are here: ``config`` (or the defaults
+of ``config_cls``) with the given arguments replaced.
+
 :class:`NativeScalarEnv` — a scalar env is its batched core with one lane:
-action-shape check, lane-0 info, the render track (kept only when a render
+action check, lane-0 info, the render track (kept only when a render
 mode is set, so memory stays flat) and the matplotlib rendering.
 
 :class:`NativeVectorEnv` — lane seeding and SAME_STEP autoreset.
 
-A native vector env wraps a batched episode core (``core.reset_lanes(lanes,
-rngs)``, ``core.step(actions)``, ``core.obs``, ``core.env_name``) and steps all
+A native vector env wraps a batched episode core and steps all
 lanes in one call chain. Seeding: ``reset(seed=s)`` gives lane i the
 generator ``seeding.np_random(s + i)`` — the one a scalar env reset with seed
 s + i uses — and a lane's later episodes continue its generator, as a scalar
@@ -20,7 +26,7 @@ lane is reset within the same ``step``; its last observation and info are in
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, TypeVar
+from typing import Any, ClassVar, TypeVar
 
 import gymnasium as gym
 import numpy as np
@@ -28,26 +34,80 @@ from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 
+from pednav_env.envs.spec import Core, validate_action
 
-class NativeScalarEnv(gym.Env):
-    """Base class: subclasses set ``self.core``, the spaces and ``render_mode``.
+ConfigT = TypeVar("ConfigT")
+
+
+def make_config(cls: type[ConfigT], config: ConfigT | None, **overrides: Any) -> ConfigT:
+    """An env's frozen config from its constructor arguments: ``config`` (or the
+    defaults of ``cls``) with the keyword arguments that were given (not None)
+    replaced."""
+    fields = {k: v for k, v in overrides.items() if v is not None}
+    if config is None:
+        return cls(**fields)
+    return replace(config, **fields) if fields else config  # type: ignore[type-var]
+
+
+class EnvFront:
+    """What the scalar and vector env classes of one environment declare."""
+
+    #: The registered id, e.g. ``"pednav/FootZupt-v0"`` (named in every error).
+    env_id: ClassVar[str]
+    #: The batched core, built as ``core_cls(config, num_lanes, env_id)``.
+    core_cls: ClassVar[type]
+    #: The frozen config dataclass the constructor builds.
+    config_cls: ClassVar[type]
+    #: Fields of ``config_cls`` the constructor also takes as keyword arguments.
+    arguments: ClassVar[tuple[str, ...]] = ()
+    core: Core
+    config: Any
+
+    @classmethod
+    def build_config(cls, config: Any, arguments: dict[str, Any]) -> Any:
+        """``config`` (or the defaults) with the keyword ``arguments`` given
+        (not None) replaced; an argument the env does not take is a TypeError
+        naming it, as Python's own for an unexpected keyword."""
+        unknown = sorted(set(arguments) - set(cls.arguments))
+        if unknown:
+            raise TypeError(
+                f"{cls.env_id}: unexpected argument(s) {unknown}; "
+                f"takes config, render_mode and {list(cls.arguments)}"
+            )
+        return make_config(cls.config_cls, config, **arguments)
+
+    def action_dim(self) -> int:
+        """Length of one lane's action (the number of knobs)."""
+        return int(self.config.action_dim)
+
+
+class NativeScalarEnv(EnvFront, gym.Env):
+    """Base class of the scalar envs: one lane of ``core_cls``.
 
     Hooks: :meth:`lane_info` (scalars describing the episode),
     :meth:`record_track` / :meth:`draw` (what the render shows).
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 4}
-    core: Any
     #: Dimension of the plotted track points, and the figure size (inches).
     track_dim = 2
     figure_size = (5.0, 5.0)
     estimate_label = "estimate"
     _figure = None
 
+    def __init__(
+        self, *, config: Any = None, render_mode: str | None = None, **arguments: Any
+    ) -> None:
+        self.check_render_mode(render_mode)
+        self.render_mode = render_mode
+        self.config = self.build_config(config, arguments)
+        self.core = self.core_cls(self.config, 1, self.env_id)
+        self.action_space, self.observation_space = lane_spaces(self.core, self.action_dim())
+
     def check_render_mode(self, render_mode: str | None) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
-                f"{self.core.env_name}: render_mode must be one of "
+                f"{self.env_id}: render_mode must be one of "
                 f"{self.metadata['render_modes']}, got {render_mode!r}"
             )
 
@@ -67,12 +127,7 @@ class NativeScalarEnv(gym.Env):
         return self.core.obs[0].copy(), info
 
     def step(self, action):
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != self.action_space.shape:
-            raise ValueError(
-                f"{self.core.env_name}: action must have shape {self.action_space.shape}, "
-                f"got {a.shape}"
-            )
+        a = validate_action(action, self.action_space.shape, self.env_id)
         obs, reward, terminated, truncated, info = self.core.step(a[None, :])
         out = {k: (v[0].copy() if np.ndim(v) > 1 else v[0].item()) for k, v in info.items()}
         out.update(self.lane_info())
@@ -128,43 +183,37 @@ class NativeScalarEnv(gym.Env):
             self._figure = None
 
 
-ConfigT = TypeVar("ConfigT")
-
-
-def make_config(cls: type[ConfigT], config: ConfigT | None, **overrides: Any) -> ConfigT:
-    """An env's frozen config from its constructor arguments: ``config`` (or the
-    defaults of ``cls``) with the keyword arguments that were given (not None)
-    replaced."""
-    fields = {k: v for k, v in overrides.items() if v is not None}
-    if config is None:
-        return cls(**fields)
-    return replace(config, **fields) if fields else config  # type: ignore[type-var]
-
-
-def lane_spaces(core: Any, action_dim: int) -> tuple[spaces.Box, spaces.Box]:
+def lane_spaces(core: Core, action_dim: int) -> tuple[spaces.Box, spaces.Box]:
     """Action space Box(-1, 1, (action_dim,)) and observation space of one lane of
     ``core`` (bounds ``core.obs_low`` / ``core.obs_high``)."""
     action = spaces.Box(-1.0, 1.0, (action_dim,), np.float32)
     return action, spaces.Box(core.obs_low, core.obs_high, dtype=np.float32)
 
 
-class NativeVectorEnv(VectorEnv):
-    """Base class: subclasses build their core and call :meth:`attach_core`."""
+class NativeVectorEnv(EnvFront, VectorEnv):
+    """Base class of the vector envs: ``num_envs`` lanes of ``core_cls``."""
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
-    core: Any
     _lane_rngs: list[np.random.Generator] | None = None
 
-    @staticmethod
-    def reject_render_mode(env_id: str, render_mode: str | None) -> None:
-        """The native vector envs do not render (their scalar versions do)."""
-        if render_mode is not None:
-            raise ValueError(f"{env_id}: the vector env does not render; got {render_mode!r}")
+    def __init__(
+        self,
+        num_envs: int = 1,
+        *,
+        config: Any = None,
+        render_mode: str | None = None,
+        **arguments: Any,
+    ) -> None:
+        if render_mode is not None:  # the scalar versions render
+            raise ValueError(f"{self.env_id}: the vector env does not render; got {render_mode!r}")
+        self.config = self.build_config(config, arguments)
+        self.attach_core(self.core_cls(self.config, int(num_envs), self.env_id))
 
-    def attach_core(self, core: Any, action_dim: int) -> None:
+    def attach_core(self, core: Core) -> None:
         """Use ``core`` (its N lanes) and set the single-lane and batched spaces."""
         self.core = core
         self.num_envs = int(core.n)
+        action_dim = self.action_dim()
         self.single_action_space, self.single_observation_space = lane_spaces(core, action_dim)
         self.action_space = spaces.Box(-1.0, 1.0, (self.num_envs, action_dim), np.float32)
         self.observation_space = spaces.Box(
@@ -197,7 +246,8 @@ class NativeVectorEnv(VectorEnv):
 
     def step(self, actions):
         if self._lane_rngs is None:
-            raise RuntimeError(f"{self.core.env_name}: call reset() before step()")
+            raise RuntimeError(f"{self.env_id}: call reset() before step()")
+        actions = validate_action(actions, self.action_space.shape, self.env_id)
         obs, reward, terminated, truncated, info = self.core.step(actions)
         info.update(self.lane_info())
         done = terminated | truncated

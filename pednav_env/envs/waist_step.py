@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, lane_spaces, make_config
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
 from pednav_env.envs.waist_core import (
     ACTION_DIM,
     ACTION_KNOBS,
@@ -152,29 +152,14 @@ class WaistStepEnv(NativeScalarEnv):
     - v0: initial version.
     """
 
+    env_id = ENV_ID
+    core_cls = WaistStepCore
+    config_cls = WaistStepConfig
+    arguments = ("scenario", "decision_interval_s", "rate_hz", "paper_steps")
     estimate_label = "step-fusion KF"
 
-    def __init__(
-        self,
-        scenario: str | None = None,
-        decision_interval_s: float | None = None,
-        rate_hz: float | None = None,
-        paper_steps: int | None = None,
-        config: WaistStepConfig | None = None,
-        render_mode: str | None = None,
-    ) -> None:
-        self.config = make_config(
-            WaistStepConfig,
-            config,
-            scenario=scenario,
-            decision_interval_s=decision_interval_s,
-            rate_hz=rate_hz,
-            paper_steps=paper_steps,
-        )
-        self.render_mode = render_mode
-        self.core = WaistStepCore(self.config, 1, ENV_ID)
-        self.check_render_mode(render_mode)
-        self.action_space, self.observation_space = lane_spaces(self.core, ACTION_DIM)
+    def action_dim(self) -> int:
+        return ACTION_DIM
 
     def lane_info(self) -> dict[str, Any]:
         return {"sensor_grade": self.core.grade[0]}
@@ -184,26 +169,13 @@ class WaistStepVectorEnv(NativeVectorEnv):
     """Native vector version of :class:`WaistStepEnv` (see its docstring):
     one batched detector and filter for all ``num_envs`` walks, SAME_STEP autoreset."""
 
-    def __init__(
-        self,
-        num_envs: int = 1,
-        scenario: str | None = None,
-        decision_interval_s: float | None = None,
-        rate_hz: float | None = None,
-        paper_steps: int | None = None,
-        config: WaistStepConfig | None = None,
-        render_mode: str | None = None,
-    ) -> None:
-        self.reject_render_mode(ENV_ID, render_mode)
-        self.config = make_config(
-            WaistStepConfig,
-            config,
-            scenario=scenario,
-            decision_interval_s=decision_interval_s,
-            rate_hz=rate_hz,
-            paper_steps=paper_steps,
-        )
-        self.attach_core(WaistStepCore(self.config, int(num_envs), ENV_ID), ACTION_DIM)
+    env_id = ENV_ID
+    core_cls = WaistStepCore
+    config_cls = WaistStepConfig
+    arguments = WaistStepEnv.arguments
+
+    def action_dim(self) -> int:
+        return ACTION_DIM
 
     def lane_info(self) -> dict[str, np.ndarray]:
         return {"sensor_grade": np.array(self.core.grade, dtype=object)}
