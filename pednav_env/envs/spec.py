@@ -78,10 +78,13 @@ class ObsFeature:
         require_range(f"ObsFeature {self.name!r}", (self.low, self.high))
 
 
-def obs_bounds(features: Sequence[ObsFeature]) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
-    """The observation space bounds (low, high), float32, of ``features`` in order."""
-    low = np.array([f.low for f in features], dtype=np.float32)
-    high = np.array([f.high for f in features], dtype=np.float32)
+def obs_bounds(
+    features: Sequence[ObsFeature], action_dim: int = 0
+) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """The observation space bounds (low, high), float32: ``features`` in order,
+    then ``action_dim`` entries in [−1, 1] (the action in force)."""
+    low = np.array([f.low for f in features] + [-1.0] * action_dim, dtype=np.float32)
+    high = np.array([f.high for f in features] + [1.0] * action_dim, dtype=np.float32)
     return low, high
 
 
