@@ -122,13 +122,13 @@ class InnovationAdaptivePolicy:
         from pednav_env.envs import marker_core as mc
         from pednav_env.envs.marker_config import ACTION_KNOBS
 
-        idx = {name: i for i, (name, _, _) in enumerate(mc.OBS_FEATURES)}
+        idx = {f.name: i for i, f in enumerate(mc.OBS_FEATURES)}
         k = len(mc.OBS_FEATURES)
         current = obs[:, k : k + self.action_space.shape[0]]
         a = np.zeros_like(current)  # other knobs at the thesis's values
         log_nis = obs[:, idx["log_nis_mean"]]
         dof = 4.0 * (1.0 - obs[:, idx["dropped_fraction"]])
-        j = next(i for i, kn in enumerate(ACTION_KNOBS) if kn[0] == "q_amplitude_scale")
-        step = _nis_step(log_nis, dof, ACTION_KNOBS[j][2], self.eta)
+        j = next(i for i, kn in enumerate(ACTION_KNOBS) if kn.name == "q_amplitude_scale")
+        step = _nis_step(log_nis, dof, ACTION_KNOBS[j].span, self.eta)
         a[:, j] = np.where(log_nis > 0, current[:, j] + step, current[:, j])
         return a

@@ -14,23 +14,28 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, replace
-from typing import Any
 
-import numpy as np
-
+from pednav_env.envs.spec import (
+    EnvConfig,
+    Knob,
+    require_nonnegative,
+    require_positive,
+    require_range,
+    require_weights,
+)
 from pednav_env.gait.heel_knee import HeelKneeConfig
 from pednav_env.gait.heel_knee_model import HeelKneeNominal
 from pednav_env.nav.marker_model import MarkerEkfConfig
 from pednav_env.sensors.uwb import UwbSpec
 
-#: Knobs set by the action: (name, paper base value, span, unit). The Q scales
+#: Knobs set by the action (log mapping, base · span ** a). The Q scales
 #: multiply the diagonal of Γ Q Γᵀ (eqs 5.2, 5.4) of their parameter group, the
 #: R scale the diagonal of R = σ² I (eq 5.5); base 1 is the thesis's filter.
-ACTION_KNOBS: tuple[tuple[str, float, float, str], ...] = (
-    ("q_amplitude_scale", 1.0, 1000.0, "1"),
-    ("q_trend_scale", 1.0, 1000.0, "1"),
-    ("q_cadence_scale", 1.0, 1000.0, "1"),
-    ("r_scale", 1.0, 100.0, "1"),
+ACTION_KNOBS: tuple[Knob, ...] = (
+    Knob("q_amplitude_scale", "log", 1.0, 1000.0, "1"),
+    Knob("q_trend_scale", "log", 1.0, 1000.0, "1"),
+    Knob("q_cadence_scale", "log", 1.0, 1000.0, "1"),
+    Knob("r_scale", "log", 1.0, 100.0, "1"),
 )
 
 
@@ -75,17 +80,8 @@ def _condition_spec(condition: str, rate_hz: float) -> UwbSpec:
 UWB_CONDITIONS: tuple[str, ...] = ("clean", "noisy", "nlos", "outliers", "dropouts", "realistic")
 
 
-def _is_range(v: Any, positive: bool = True) -> bool:
-    try:
-        lo, hi = (float(x) for x in v)
-    except (TypeError, ValueError):
-        return False
-    ok = math.isfinite(lo) and math.isfinite(hi) and lo <= hi
-    return ok and (lo > 0 if positive else True)
-
-
 @dataclass(frozen=True)
-class MarkerTrackConfig:
+class MarkerTrackConfig(EnvConfig):
     """Settings of the marker environment (all lanes share them).
 
     ``scenario``: ``"random"`` (domain randomisation) or ``"paper"`` (paper
@@ -125,35 +121,19 @@ class MarkerTrackConfig:
     cadence_bounds: tuple[float, float] = (0.25, 4.0)
 
     def __post_init__(self) -> None:
-        if self.scenario not in ("random", "paper"):
-            raise ValueError(f"scenario must be 'random' or 'paper', got {self.scenario!r}")
-        if not (isinstance(self.rate_hz, int | float) and math.isfinite(self.rate_hz)):
-            raise ValueError(f"rate_hz must be > 0, got {self.rate_hz!r}")
-        if self.rate_hz <= 0:
-            raise ValueError(f"rate_hz must be > 0, got {self.rate_hz!r}")
-        d = self.decision_interval_s
-        if not (isinstance(d, int | float) and math.isfinite(d) and d > 0):
-            raise ValueError(f"decision_interval_s must be > 0, got {d!r}")
-        if round(d * self.rate_hz) < 1:
-            raise ValueError(f"decision_interval_s={d!r} is shorter than one UWB sample")
-        if not _is_range(self.duration_s) or round(self.duration_s[0] * self.rate_hz) < 2:
+        self.check_env_settings(sample="UWB sample")
+        require_range("duration_s", self.duration_s, positive=True)
+        if round(self.duration_s[0] * self.rate_hz) < 2:
             raise ValueError(
                 f"duration_s must be (lo, hi) covering ≥ 2 samples, got {self.duration_s!r}"
             )
         p = self.paper_duration_s
         if not (isinstance(p, int | float) and math.isfinite(p) and round(p * self.rate_hz) >= 2):
             raise ValueError(f"paper_duration_s must cover ≥ 2 samples, got {p!r}")
-        t = self.truth_corr_time_s
-        if not (isinstance(t, int | float) and math.isfinite(t) and t > 0):
-            raise ValueError(f"truth_corr_time_s must be > 0, got {t!r}")
-        g = self.gait_change_rate_hz
-        if not (isinstance(g, int | float) and math.isfinite(g) and g >= 0):
-            raise ValueError(f"gait_change_rate_hz must be ≥ 0, got {g!r}")
+        require_positive("truth_corr_time_s", self.truth_corr_time_s)
+        require_nonnegative("gait_change_rate_hz", self.gait_change_rate_hz)
         for name in ("cadence_factor_range", "stride_factor_range", "noise_factor_range"):
-            if not _is_range(getattr(self, name)):
-                raise ValueError(
-                    f"{name} must be (lo, hi) with 0 < lo ≤ hi, got {getattr(self, name)!r}"
-                )
+            require_range(name, getattr(self, name), positive=True)
         if not self.uwb_conditions:
             raise ValueError("uwb_conditions must name at least one condition")
         for c in self.uwb_conditions:
@@ -161,14 +141,9 @@ class MarkerTrackConfig:
                 raise ValueError(
                     f"uwb_conditions: unknown condition {c!r}; known: {UWB_CONDITIONS}"
                 )
-        w = np.asarray(self.uwb_condition_weights, dtype=float)
-        if (
-            w.shape != (len(self.uwb_conditions),)
-            or not np.all(np.isfinite(w))
-            or np.any(w < 0)
-            or w.sum() <= 0
-        ):
-            raise ValueError(f"uwb_condition_weights invalid: {self.uwb_condition_weights!r}")
+        require_weights(
+            "uwb_condition_weights", self.uwb_condition_weights, len(self.uwb_conditions)
+        )
         if self.filter is None:
             object.__setattr__(self, "filter", MarkerEkfConfig(sample_period=1.0 / self.rate_hz))
         elif not isinstance(self.filter, MarkerEkfConfig):
@@ -183,17 +158,11 @@ class MarkerTrackConfig:
             object.__setattr__(self, "reanchor_after_s", after)
         a = self.reanchor_after_s
         k = self.reanchor_keep_s
-        if not (isinstance(k, int | float) and math.isfinite(k) and k >= 0):
-            raise ValueError(f"reanchor_keep_s must be ≥ 0, got {k!r}")
+        require_nonnegative("reanchor_keep_s", k)
         if not (isinstance(a, int | float) and not math.isnan(a) and a > k):
             raise ValueError(f"reanchor_after_s must be > reanchor_keep_s={k!r}, got {a!r}")
-        e = self.divergence_error_m
-        if not (isinstance(e, int | float) and math.isfinite(e) and e > 0):
-            raise ValueError(f"divergence_error_m must be > 0, got {e!r}")
-        if (
-            not _is_range(self.cadence_bounds)
-            or not self.cadence_bounds[0] < 1.0 < self.cadence_bounds[1]
-        ):
+        require_range("cadence_bounds", self.cadence_bounds, positive=True)
+        if not self.cadence_bounds[0] < 1.0 < self.cadence_bounds[1]:
             raise ValueError(
                 f"cadence_bounds must be (lo, hi) with 0 < lo < 1 < hi, got {self.cadence_bounds!r}"
             )
@@ -207,10 +176,6 @@ class MarkerTrackConfig:
     def sample_period(self) -> float:
         """T = 1/rate (s)."""
         return 1.0 / self.rate_hz
-
-    @property
-    def interval_samples(self) -> int:
-        return int(round(self.decision_interval_s * self.rate_hz))
 
     @property
     def action_dim(self) -> int:

@@ -52,6 +52,7 @@ from scipy.stats import chi2
 
 from pednav_env.envs.marker_config import ACTION_KNOBS, MarkerTrackConfig
 from pednav_env.envs.marker_episode import generate_episode
+from pednav_env.envs.spec import ObsFeature, obs_bounds, validate_action
 from pednav_env.gait.heel_knee_model import I_CX, I_OMEGA, PARAM_NAMES
 from pednav_env.nav.marker_ekf import MarkerEkfEngine
 from pednav_env.nav.marker_model import DIM_X, DIM_Z, MarkerEkfConfig
@@ -65,17 +66,17 @@ Q_GROUP: tuple[int, ...] = (0, 0, 1, 1, 0, 2)
 #: Coordinates of a marker record, in the order of eq 4.12.
 COORDS: tuple[str, ...] = ("heel_x", "heel_z", "knee_x", "knee_z")
 
-#: Observation entries: (name, low, high); documented in the env docstring.
-OBS_FEATURES: tuple[tuple[str, float, float], ...] = (
-    ("dropped_fraction", 0.0, 1.0),
-    ("log_nis_mean", 0.0, 30.0),
-    ("log_nis_max", 0.0, 30.0),
-    ("nis_gate_fraction", 0.0, 1.0),
-    *((f"nu_rms_{c}", 0.0, 100.0) for c in COORDS),
-    *((f"nu_mean_{c}", -100.0, 100.0) for c in COORDS),
-    *((f"log10_rel_std_{p}", -8.0, 4.0) for p in PARAM_NAMES),
-    *((f"rel_dev_{p}", -10.0, 10.0) for p in PARAM_NAMES),
-    ("time_since_anchor", 0.0, 3600.0),
+#: Observation entries; documented in the env docstring.
+OBS_FEATURES: tuple[ObsFeature, ...] = (
+    ObsFeature("dropped_fraction", 0.0, 1.0),
+    ObsFeature("log_nis_mean", 0.0, 30.0),
+    ObsFeature("log_nis_max", 0.0, 30.0),
+    ObsFeature("nis_gate_fraction", 0.0, 1.0),
+    *(ObsFeature(f"nu_rms_{c}", 0.0, 100.0) for c in COORDS),
+    *(ObsFeature(f"nu_mean_{c}", -100.0, 100.0) for c in COORDS),
+    *(ObsFeature(f"log10_rel_std_{p}", -8.0, 4.0) for p in PARAM_NAMES),
+    *(ObsFeature(f"rel_dev_{p}", -10.0, 10.0) for p in PARAM_NAMES),
+    ObsFeature("time_since_anchor", 0.0, 3600.0, "s"),
 )
 
 #: Error (× ``divergence_error_m``) booked for a lane whose estimate is not finite.
@@ -175,12 +176,7 @@ class MarkerTrackCore:
         self.reanchors = np.zeros(n, dtype=np.int64)
         self.last_error = np.zeros(n)
         self.lanes = np.arange(n)
-        self.obs_low = np.array(
-            [lo for _, lo, _ in OBS_FEATURES] + [-1.0] * config.action_dim, dtype=np.float32
-        )
-        self.obs_high = np.array(
-            [hi for _, _, hi in OBS_FEATURES] + [1.0] * config.action_dim, dtype=np.float32
-        )
+        self.obs_low, self.obs_high = obs_bounds(OBS_FEATURES, config.action_dim)
         self.obs = np.zeros((n, len(OBS_FEATURES) + config.action_dim), dtype=np.float32)
         self._obs_low64 = self.obs_low.astype(np.float64)[:, None]
         self._obs_high64 = self.obs_high.astype(np.float64)[:, None]
@@ -188,8 +184,8 @@ class MarkerTrackCore:
         self._abs_p0 = np.abs(config.filter.nominal.vector)[:, None]
         self._log10_abs_p0 = np.log10(self._abs_p0)
         self._qgroup = np.asarray(Q_GROUP)
-        self._knob_base = np.array([base for _, base, _, _ in ACTION_KNOBS])
-        self._knob_log_span = np.log([span for _, _, span, _ in ACTION_KNOBS])
+        self._knob_base = np.array([knob.base for knob in ACTION_KNOBS])
+        self._knob_log_span = np.log([knob.span for knob in ACTION_KNOBS])
         # q and r of action 0 (what _apply_action sets for a lane after reset)
         rest = self._knob_base * np.exp(np.zeros(config.action_dim) * self._knob_log_span)
         self._q_rest = self.engine.q0 * rest[self._qgroup]
@@ -236,14 +232,8 @@ class MarkerTrackCore:
 
     # ------------------------------------------------------------------ action
     def validate_action(self, action: Any) -> Array:
-        """Shape ``(N, k)`` and finiteness check; returns float64."""
-        a = np.asarray(action, dtype=np.float64)
-        want = (self.n, self.config.action_dim)
-        if a.shape != want:
-            raise ValueError(f"{self.env_name}: actions must have shape {want}, got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"{self.env_name}: action contains NaN or inf: {a.tolist()}")
-        return a
+        """Shape ``(N, k)``, numeric and finite (:func:`spec.validate_action`); float64."""
+        return validate_action(action, (self.n, self.config.action_dim), self.env_name)
 
     def _scales(self, lanes: NDArray[np.integer] | slice) -> Array:
         """Knob values base · span**a = base · exp(a ln span), ``(B, k)``."""
@@ -264,7 +254,7 @@ class MarkerTrackCore:
     def knob_values(self) -> dict[str, Array]:
         """Current physical value of every knob, per lane."""
         scales = self._scales(slice(None))
-        return {name: scales[:, i] for i, (name, *_) in enumerate(ACTION_KNOBS)}
+        return {knob.name: scales[:, i] for i, knob in enumerate(ACTION_KNOBS)}
 
     # ------------------------------------------------------------------ step
     def step(self, action: Any) -> tuple[Array, Array, BoolArray, BoolArray, dict]:

@@ -7,20 +7,30 @@
   core (N lanes stepped in one call).
 - :func:`validate_action`: the one action check of every core.
 - :class:`EnvConfig`: the settings every env config has (scenario, decision
-  interval, sample rate, divergence bound) and their checks, with the shared
-  validators (:func:`require_positive`, :func:`require_probability`,
-  :func:`require_range`, :func:`require_weights`) for the rest of a config.
+  interval, sample rate, divergence bound) and their checks; the rest of a
+  config uses the shared validators of :mod:`pednav_env.checks` (re-exported
+  here: ``require_positive``, ``require_probability``, ``require_range``,
+  ``require_weights`` ...).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
+
+from pednav_env.checks import (
+    require_choice,
+    require_finite,
+    require_nonnegative,
+    require_positive,
+    require_probability,
+    require_range,
+    require_weights,
+)
 
 Array = NDArray[np.float64]
 
@@ -127,72 +137,14 @@ def validate_action(action: Any, shape: tuple[int, ...], env_name: str) -> Array
     return a
 
 
-# ---------------------------------------------------------------- validators
-def require_finite(name: str, value: Any) -> None:
-    """``value`` is a finite real number (bool is not one)."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.number):
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
-
-
-def require_positive(name: str, value: Any) -> None:
-    """``value`` is a finite number > 0."""
-    require_finite(name, value)
-    if value <= 0:
-        raise ValueError(f"{name} must be > 0, got {value!r}")
-
-
-def require_nonnegative(name: str, value: Any) -> None:
-    """``value`` is a finite number ≥ 0."""
-    require_finite(name, value)
-    if value < 0:
-        raise ValueError(f"{name} must be >= 0, got {value!r}")
-
-
-def require_probability(name: str, value: Any) -> None:
-    """``value`` is a probability in [0, 1]."""
-    require_finite(name, value)
-    if not 0 <= value <= 1:
-        raise ValueError(f"{name} must be a probability in [0, 1], got {value!r}")
-
-
-def require_range(name: str, value: Any, *, positive: bool = False) -> None:
-    """``value`` is a pair ``(low, high)`` of finite numbers with low ≤ high
-    (and low > 0 when ``positive``)."""
-    if not (isinstance(value, tuple | list) and len(value) == 2):
-        raise ValueError(f"{name} must be a (low, high) pair, got {value!r}")
-    low, high = value
-    require_finite(f"{name} low", low)
-    require_finite(f"{name} high", high)
-    if low > high or (positive and low <= 0):
-        bound = "0 < low <= high" if positive else "low <= high"
-        raise ValueError(f"{name} must be a range with {bound}, got {value!r}")
-
-
-def require_weights(name: str, weights: Sequence[float], count: int) -> None:
-    """``weights`` are ``count`` finite non-negative numbers with a positive sum."""
-    w = np.asarray(weights, dtype=float)
-    if w.shape != (count,) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
-        raise ValueError(
-            f"{name} must be {count} non-negative weights with a positive sum, got {weights!r}"
-        )
-
-
-def require_choice(name: str, value: Any, choices: Sequence[Any]) -> None:
-    """``value`` is one of ``choices``."""
-    if value not in choices:
-        raise ValueError(f"{name} must be one of {tuple(choices)}, got {value!r}")
-
-
 class EnvConfig:
     """Mixin of the frozen env configs: the settings every environment has.
 
     A config dataclass declares ``scenario``, ``decision_interval_s``,
-    ``rate_hz``, ``divergence_error_m`` and ``divergence_error_fraction`` (with
-    its own defaults) and calls :meth:`check_env_settings` from its
-    ``__post_init__``. Divergence is a horizontal error above
-    ``divergence_error_m + divergence_error_fraction × distance walked``.
+    ``rate_hz``, ``divergence_error_m`` and, when the bound grows with the
+    distance walked, ``divergence_error_fraction`` (with its own defaults), and
+    calls :meth:`check_env_settings` from its ``__post_init__``. Divergence is a
+    horizontal error above ``divergence_error_m + divergence_error_fraction × distance walked``.
     """
 
     SCENARIOS: ClassVar[tuple[str, ...]] = ("random", "paper")
@@ -200,7 +152,6 @@ class EnvConfig:
     decision_interval_s: float
     rate_hz: float
     divergence_error_m: float
-    divergence_error_fraction: float
 
     def check_env_settings(self, sample: str = "sample") -> None:
         """Scenario known, rate and interval finite and > 0 with at least one
@@ -213,9 +164,30 @@ class EnvConfig:
                 f"decision_interval_s={self.decision_interval_s!r} is shorter than one {sample}"
             )
         require_positive("divergence_error_m", self.divergence_error_m)
-        require_nonnegative("divergence_error_fraction", self.divergence_error_fraction)
+        # an env whose bound does not grow with the distance has no fraction
+        require_nonnegative(
+            "divergence_error_fraction", getattr(self, "divergence_error_fraction", 0.0)
+        )
 
     @property
     def interval_samples(self) -> int:
         """Samples per decision interval."""
         return int(round(self.decision_interval_s * self.rate_hz))
+
+
+__all__ = [
+    "Core",
+    "EnvConfig",
+    "Knob",
+    "ObsFeature",
+    "StepResult",
+    "obs_bounds",
+    "require_choice",
+    "require_finite",
+    "require_nonnegative",
+    "require_positive",
+    "require_probability",
+    "require_range",
+    "require_weights",
+    "validate_action",
+]
