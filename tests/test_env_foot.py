@@ -1,8 +1,10 @@
-"""``pednav/FootZupt-v0``: the return against an independent run of the engine, clipped
-actions, the minimum-stance knob, the paper scenario and configuration errors (the
-contract every env keeps is in tests/test_env_contract.py)."""
+"""``pednav/FootZupt-v0``: the return against an independent run of the engine, the
+held-error tail after termination, clipped actions, the minimum-stance knob, the paper
+scenario and configuration errors (the contract every env keeps is in
+tests/test_env_contract.py)."""
 
 import warnings
+from dataclasses import replace
 
 import gymnasium as gym
 import numpy as np
@@ -10,7 +12,7 @@ import pytest
 from env_rollout import rollout
 
 import pednav_env  # noqa: F401  (registers the environments)
-from pednav_env.envs.foot_core import FootZuptConfig
+from pednav_env.envs.foot_core import FootZuptConfig, generate_episode
 from pednav_env.gait.foot_route import RouteRandomization
 from pednav_env.nav.zupt_ukf import ZuptUkf
 
@@ -97,3 +99,37 @@ def test_bad_configuration_raises():
         gym.make(ENV_ID, render_mode="ascii")
     with pytest.raises(ValueError, match="imu_grades"):
         FootZuptConfig(imu_grades=("nope",), imu_grade_weights=(1.0,))
+
+
+def test_termination_holds_the_final_error_for_the_rest_of_the_walk():
+    """A tight divergence bound (0.3 m, no distance term) ends the episode early:
+    ``terminated`` (not truncated), the errors up to then are those of the
+    uncapped run, and the return is minus the time-averaged error with the last
+    error held for the walk's remaining samples. The walk length comes from the
+    episode generator, the error series from the per-step info."""
+    capped = replace(SHORT, divergence_error_m=0.3, divergence_error_fraction=0.0)
+    seed = 4
+    steps = {}
+    for name, config in (("full", SHORT), ("capped", capped)):
+        env = gym.make(ENV_ID, config=config)
+        env.reset(seed=seed)
+        errors, rewards = [], []
+        while True:
+            _, r, term, trunc, info = env.step(np.zeros(4, np.float32))
+            errors.append(info["error"])
+            rewards.append(r)
+            if term or trunc:
+                break
+        steps[name] = (np.array(errors), np.array(rewards), term, trunc)
+    walk = generate_episode(SHORT, gym.utils.seeding.np_random(seed)[0])
+    nav = walk.omega_b.shape[0] - round(SHORT.filter.alignment_s * SHORT.rate_hz)
+    k = round(SHORT.decision_interval_s * SHORT.rate_hz)
+    full_err, _, full_term, full_trunc = steps["full"]
+    assert full_trunc and not full_term and len(full_err) == -(-nav // k)
+    err, rew, term, trunc = steps["capped"]
+    m = len(err)
+    assert term and not trunc and 2 <= m < len(full_err)
+    assert err[-1] > 0.3 and np.all(err[:-1] <= 0.3)
+    np.testing.assert_array_equal(err, full_err[:m])  # the bound only ends the episode
+    held = np.concatenate((np.repeat(err[:-1], k), np.full(nav - (m - 1) * k, err[-1])))
+    assert rew.sum() == pytest.approx(-held.mean(), rel=1e-12)  # float sums: ~1e-15
