@@ -1,23 +1,41 @@
-"""Learned policies as saved on disk: an SB3 model plus its normalisation statistics.
+"""Policies by name or from disk, all with SB3's ``predict`` signature.
 
-A run directory holds ``model.zip``, ``vecnormalize.pkl`` (observation
-statistics from training) and ``meta.json`` (env, algorithm, budget,
-command). :class:`NormalizedModelPolicy` applies the statistics itself, so
-it has SB3's ``predict`` signature on raw observations and goes through the
-same evaluation as the baselines.
+Names: ``paper`` (action 0), ``tuned`` (the shipped best constant action),
+``adaptive`` (the innovation-based rule), ``pretrained`` (the shipped tuner
+under ``agents/pretrained/``). Paths: a run directory of ``pednav train``
+(``model.zip``, ``vecnormalize.pkl``, ``meta.json``), a saved SB3 model
+(``.zip``), a tuned-actions JSON file written by ``pednav tune``, or a tune run
+directory holding one.
+
+:class:`NormalizedModelPolicy` applies a run's observation statistics itself,
+so a learned model takes raw observations and goes through the same evaluation
+as the baselines.
 """
 
 from __future__ import annotations
 
 import json
 import pickle
+import warnings
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from gymnasium import spaces
+
+from baselines import InnovationAdaptivePolicy, PaperPolicy, TunedFixedPolicy
+from baselines.tuned import RESULT_NAME
 
 #: Shipped tuners: agents/pretrained/<env name>/.
 PRETRAINED_DIR = Path(__file__).parent / "pretrained"
+#: Policy names understood besides a path.
+BUILTIN_POLICIES = ("paper", "tuned", "adaptive", "pretrained")
+#: Observation statistics saved beside a model trained under VecNormalize.
+STATS_NAME = "vecnormalize.pkl"
+#: Envs that play another env's named policies (same spaces and knobs): the replay
+#: env runs the tuners made in simulation.
+POLICY_SOURCE_ENV = {"pednav/FootZuptReplay-v0": "pednav/FootZupt-v0"}
 
 
 class NormalizedModelPolicy:
@@ -43,7 +61,12 @@ class NormalizedModelPolicy:
 
 
 def load_run(path: str | Path) -> NormalizedModelPolicy:
-    """Load a run directory, or a ``model.zip`` with ``vecnormalize.pkl`` beside it."""
+    """Load a run directory, or a ``model.zip`` with ``vecnormalize.pkl`` beside it.
+
+    Without ``vecnormalize.pkl`` the model sees raw observations; a
+    ``UserWarning`` says so (a model trained under ``VecNormalize`` then acts on
+    inputs it has never seen).
+    """
     from stable_baselines3 import PPO, SAC
 
     path = Path(path)
@@ -51,7 +74,8 @@ def load_run(path: str | Path) -> NormalizedModelPolicy:
     if not model_file.exists():
         raise ValueError(f"policy {str(path)!r}: no such model file ({model_file})")
     meta_file = model_file.parent / "meta.json"
-    algo = json.loads(meta_file.read_text()).get("algo") if meta_file.exists() else None
+    meta = json.loads(meta_file.read_text()) if meta_file.exists() else {}
+    algo = meta.get("algo")
     classes = {"ppo": PPO, "sac": SAC}
     candidates = [classes[algo]] if algo in classes else [PPO, SAC]
     model = None
@@ -63,14 +87,63 @@ def load_run(path: str | Path) -> NormalizedModelPolicy:
             continue
     if model is None:
         raise ValueError(f"policy {str(path)!r}: not a PPO or SAC model")
-    stats_file = model_file.parent / "vecnormalize.pkl"
+    stats_file = model_file.parent / STATS_NAME
     if stats_file.exists():
         with stats_file.open("rb") as fh:
             vn = pickle.load(fh)
         return NormalizedModelPolicy(model, vn.obs_rms, vn.clip_obs, vn.epsilon)
+    normalized = (meta.get("hyperparams") or {}).get("normalize", {}).get("norm_obs")
+    known = " (its meta.json says it was trained with VecNormalize)" if normalized else ""
+    warnings.warn(
+        f"{model_file}: no {STATS_NAME} beside it, so the model is evaluated on raw "
+        f"observations{known}; if it was trained under VecNormalize, save the statistics "
+        f"(vec.save('{STATS_NAME}')) next to the model",
+        UserWarning,
+        stacklevel=2,
+    )
     return NormalizedModelPolicy(model, None, 10.0, 1e-8)
 
 
 def pretrained_dir(env_id: str) -> Path:
     """Directory of the shipped tuner for ``env_id`` (e.g. pednav/FootZupt-v0)."""
     return PRETRAINED_DIR / env_id.split("/")[-1]
+
+
+def load_policy(
+    name: str,
+    action_space: spaces.Box,
+    env_id: str = "",
+    other_names: Sequence[str] = (),
+) -> Any:
+    """A policy by name, or from a path (see the module docstring).
+
+    ``other_names``: names the caller handles itself (e.g. ``real-fixed`` in
+    ``pednav run``), listed in the error for an unknown name. The named policies
+    of an env in :data:`POLICY_SOURCE_ENV` are those of its source env.
+    """
+    env_id = POLICY_SOURCE_ENV.get(env_id, env_id)
+    if name == "paper":
+        return PaperPolicy(action_space)
+    if name == "tuned":
+        return TunedFixedPolicy.for_env(env_id, action_space)
+    if name == "adaptive":
+        return InnovationAdaptivePolicy(action_space, env_id)
+    if name == "pretrained":
+        path = pretrained_dir(env_id)
+        if not (path / "model.zip").exists():
+            raise ValueError(f"no pretrained tuner shipped for {env_id!r} (looked in {path})")
+        return load_run(path)
+    path = Path(name)
+    if path.suffix == ".json":
+        if not path.is_file():
+            raise ValueError(f"policy {name!r}: no such tuned-actions file")
+        return TunedFixedPolicy.from_file(path, env_id, action_space)
+    if path.is_dir() and not (path / "model.zip").exists() and (path / RESULT_NAME).exists():
+        return TunedFixedPolicy.from_file(path / RESULT_NAME, env_id, action_space)
+    if path.suffix == ".zip" or path.exists():
+        return load_run(path)
+    names = ", ".join((*BUILTIN_POLICIES, *other_names))
+    raise ValueError(
+        f"unknown policy {name!r}: use one of {names}, or a path to a training run directory, "
+        f"a saved SB3 model (.zip), or a tuned-actions file ({RESULT_NAME}) or its directory"
+    )

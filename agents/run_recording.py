@@ -22,7 +22,6 @@ footprints ``footprints``, ``footprint_mean_error_m``,
 
 from __future__ import annotations
 
-import inspect
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -51,11 +50,9 @@ SIM_ENV_ID = "pednav/FootZupt-v0"
 
 
 def _load_policy(name: str, action_space: Any) -> Any:
-    from agents.evaluate import load_policy
+    from agents.policies import load_policy
 
-    if len(inspect.signature(load_policy).parameters) >= 3:
-        return load_policy(name, action_space, SIM_ENV_ID)
-    return load_policy(name, action_space)
+    return load_policy(name, action_space, SIM_ENV_ID, other_names=SETUP_NAMES)
 
 
 def run_with_policy(

@@ -4,16 +4,21 @@
 [--config FILE] [--run-dir DIR] [--resume]``
 
 - The env is the native vector env (one batched filter for all K lanes)
-  behind the thin :class:`agents.sb3_vec.NativeVecEnv` adapter, wrapped in
+  behind the :class:`pednav_env.sb3.NativeVecEnv` adapter, wrapped in
   ``VecMonitor`` and ``VecNormalize`` (observation statistics, and reward
   scaling for the optimiser; evaluation always reports raw errors).
 - Hyperparameters come from ``agents/hyperparams/<algo>.yml`` keyed by env id
   (RL-Zoo style), or from ``--config FILE``.
-- Training episodes use only training seeds (:mod:`baselines.seeds`).
+- Training episodes use only training seeds (:mod:`pednav_env.seeds`): run
+  seed S plays lane seeds ``training_seed(S) + i``; a resumed run moves on to
+  the next ``n_envs`` seeds of its block, so it does not replay its first
+  episodes.
 - The run directory gets ``model.zip``, ``vecnormalize.pkl``, ``meta.json``,
   ``checkpoints/`` (model and statistics every ``checkpoint_steps``) and
   ``tb/`` (TensorBoard logs); ``--resume`` continues from the newest
   checkpoint.
+- :func:`train_seeds` trains one run per seed (``pednav train --seeds``), in
+  this process or as parallel tasks of a backend (:mod:`agents.backends`).
 """
 
 from __future__ import annotations
@@ -22,6 +27,8 @@ import json
 import re
 import sys
 import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -29,8 +36,8 @@ import gymnasium as gym
 import yaml
 
 import pednav_env  # noqa: F401  (registers the environments)
-from agents.sb3_vec import NativeVecEnv
-from baselines.seeds import training_seed
+from pednav_env.sb3 import NativeVecEnv
+from pednav_env.seeds import training_seed
 
 HYPERPARAMS_DIR = Path(__file__).parent / "hyperparams"
 ALGOS = ("ppo", "sac")
@@ -89,19 +96,23 @@ def train(
     checkpoint_steps = int(hp.get("checkpoint_steps", 50_000))
     algo_kwargs = {k: v for k, v in hp.items() if k not in RUN_KEYS}
     policy = algo_kwargs.pop("policy", "MlpPolicy")
-    run_dir = Path(run_dir or f"runs/{env_id.split('/')[-1]}/{algo}_seed{seed}")
+    run_dir = Path(run_dir or default_run_dir(env_id, algo, seed))
     run_dir.mkdir(parents=True, exist_ok=True)
+    latest = _latest_checkpoint(run_dir) if resume else None
+    if resume and latest is None:
+        raise ValueError(f"--resume: no checkpoint in {run_dir / 'checkpoints'}")
+    meta_file = run_dir / "meta.json"
+    earlier = json.loads(meta_file.read_text()) if latest and meta_file.exists() else {}
+    resumes = int(earlier.get("resumes", 0)) + 1 if latest is not None else 0
 
     venv = gym.make_vec(
         env_id, num_envs=n_envs, vectorization_mode="vector_entry_point", **env_kwargs
     )
-    vec = NativeVecEnv(venv)
-    vec.seed(training_seed(seed))
+    # The adapter reads SB3's seed (also the one PPO(seed=...) passes) as a run seed.
+    vec = NativeVecEnv(venv, split="training", lane_offset=resumes * n_envs)
+    lane_seeds = vec.seed(seed)
     vec = VecMonitor(vec)
     cls = {"ppo": PPO, "sac": SAC}[algo]
-    latest = _latest_checkpoint(run_dir) if resume else None
-    if resume and latest is None:
-        raise ValueError(f"--resume: no checkpoint in {run_dir / 'checkpoints'}")
     if latest is not None:
         vec = VecNormalize.load(str(latest[1]), vec)
         model = cls.load(latest[0], env=vec, device="cpu", tensorboard_log=str(run_dir / "tb"))
@@ -143,8 +154,81 @@ def train(
         "train_seconds": round(seconds, 1),
         "hyperparams": hp,
         "training_seeds_from": training_seed(seed),
+        "lane_seeds": [*earlier.get("lane_seeds", []), [lane_seeds[0], lane_seeds[-1]]],
+        "resumes": resumes,
         "command": " ".join(sys.argv),
     }
-    (run_dir / "meta.json").write_text(json.dumps(meta, indent=2, default=str))
+    meta_file.write_text(json.dumps(meta, indent=2, default=str))
     vec.close()
     return run_dir
+
+
+def default_run_dir(env_id: str, algo: str, seed: int, parent: str | Path | None = None) -> Path:
+    """``runs/<env name>/<algo>_seed<seed>`` (or under ``parent``)."""
+    base = Path(parent) if parent is not None else Path("runs") / env_id.split("/")[-1]
+    return base / f"{algo}_seed{seed}"
+
+
+@dataclass(frozen=True)
+class TrainJob:
+    """One training run of :func:`train_seeds` (the arguments of :func:`train`)."""
+
+    env_id: str
+    algo: str
+    seed: int
+    run_dir: Path
+    timesteps: int | None = None
+    n_envs: int | None = None
+    config_file: str | None = None
+    resume: bool = False
+    progress_bar: bool = False
+    hyperparams: dict[str, Any] = field(default_factory=dict)
+
+
+def run_job(job: TrainJob) -> Path:
+    """Train ``job``; returns its run directory."""
+    return train(
+        job.env_id,
+        job.algo,
+        job.timesteps,
+        job.seed,
+        job.n_envs,
+        job.config_file,
+        job.run_dir,
+        job.resume,
+        progress_bar=job.progress_bar,
+        hyperparams=job.hyperparams,
+    )
+
+
+def train_seeds(
+    env_id: str,
+    algo: str,
+    seeds: Sequence[int],
+    parent_dir: str | Path | None = None,
+    backend: Any = None,
+    on_run: Callable[[int], None] | None = None,
+    **train_kwargs: Any,
+) -> list[Path]:
+    """One run per seed, in ``parent_dir/<algo>_seed<S>`` (default
+    ``runs/<env name>/``); ``backend`` None runs them in turn, else as its parallel
+    tasks. Each run is the same as ``train(env_id, algo, seed=S, ...)`` alone.
+    ``on_run(1)`` is called as each run finishes."""
+    if not seeds:
+        raise ValueError("seeds: give at least one training seed")
+    if len(set(seeds)) != len(seeds):
+        raise ValueError(f"seeds must be distinct, got {list(seeds)}")
+    for s in seeds:
+        training_seed(s)  # ValueError for a seed outside the training range
+    jobs = [
+        TrainJob(env_id, algo, s, default_run_dir(env_id, algo, s, parent_dir), **train_kwargs)
+        for s in seeds
+    ]
+    if backend is None:
+        out = []
+        for job in jobs:
+            out.append(run_job(job))
+            if on_run is not None:
+                on_run(1)
+        return out
+    return list(backend.map(run_job, jobs, on_done=lambda i: on_run and on_run(1)))

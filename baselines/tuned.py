@@ -4,14 +4,21 @@ This is the honest bar for a learned tuner: a tuner that only matches it has
 learned nothing adaptive. The search (:func:`search`) minimises the mean
 time-averaged error of a constant action over a fixed set of training
 episodes (common random numbers for all candidates) with CMA-ES (``cma``),
-bounds [-1, 1]; every generation runs as one batched vector env with a lane
-per (candidate, episode). The result is shipped in ``tuned_actions.json``.
+bounds [-1, 1]. Every generation runs as batched vector envs with a lane per
+(candidate, episode); ``map_fn``/``n_tasks`` spread a generation's candidates
+over several workers (lanes are independent, so the split changes no result).
+
+Results are tables ``{env_id: result}`` in JSON files (:func:`save_result`).
+The shipped table is ``tuned_actions.json`` beside this module
+(:data:`RESULTS_FILE`); ``TunedFixedPolicy.for_env`` reads it and
+``TunedFixedPolicy.from_file`` reads any other.
 """
 
 from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -19,9 +26,15 @@ import numpy as np
 from gymnasium import spaces
 
 from baselines.rollout import first_episode_errors
-from baselines.seeds import SEARCH_SEED
+from pednav_env.seeds import SEARCH_SEED
 
+#: The shipped search results (one entry per env id).
 RESULTS_FILE = Path(__file__).parent / "tuned_actions.json"
+#: File name of a search result in a run directory.
+RESULT_NAME = "tuned_actions.json"
+
+#: ``map_fn(fn, items) -> list`` in item order (the builtin ``map`` by default).
+MapFn = Callable[[Callable[[Any], Any], Sequence[Any]], Sequence[Any]]
 
 
 class TunedFixedPolicy:
@@ -39,16 +52,71 @@ class TunedFixedPolicy:
     @classmethod
     def for_env(cls, env_id: str, action_space: spaces.Box) -> TunedFixedPolicy:
         """The shipped search result for ``env_id``."""
-        table = json.loads(RESULTS_FILE.read_text()) if RESULTS_FILE.exists() else {}
+        table = read_results(RESULTS_FILE) if RESULTS_FILE.exists() else {}
         if env_id not in table:
             raise ValueError(
                 f"no tuned-fixed action for {env_id!r} yet: run `pednav tune {env_id}`"
             )
         return cls(np.array(table[env_id]["action"]), action_space)
 
+    @classmethod
+    def from_file(cls, path: str | Path, env_id: str, action_space: spaces.Box) -> TunedFixedPolicy:
+        """The result for ``env_id`` in a results file written by ``pednav tune``."""
+        table = read_results(Path(path))
+        if env_id not in table:
+            raise ValueError(
+                f"{path}: no tuned-fixed action for {env_id!r} (it has {sorted(table)})"
+            )
+        return cls(np.array(table[env_id]["action"]), action_space)
+
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         batch = np.asarray(observation).shape[:-1]
         return np.broadcast_to(self.action, batch + self.action.shape).copy(), state
+
+
+def read_results(path: Path) -> dict[str, Any]:
+    """A results table ``{env_id: {"action": [...], ...}}``; ValueError naming the file
+    when it is not one."""
+    try:
+        table = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path}: not a readable tuned-actions JSON file ({exc})") from None
+    if not isinstance(table, dict) or not all(
+        isinstance(v, dict) and "action" in v for v in table.values()
+    ):
+        raise ValueError(f"{path}: expected {{env_id: {{'action': [...], ...}}}}")
+    return table
+
+
+def save_result(env_id: str, result: dict[str, Any], path: Path) -> Path:
+    """Write ``result`` as the entry of ``env_id`` in the table at ``path`` (other
+    entries kept); returns ``path``."""
+    table = read_results(path) if path.exists() else {}
+    table[env_id] = result
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(table, indent=2) + "\n")
+    return path
+
+
+def constant_action_errors(
+    env_id: str,
+    actions: np.ndarray,
+    episode_seeds: Sequence[int],
+    env_kwargs: dict[str, Any] | None = None,
+) -> np.ndarray:
+    """Time-averaged error of each constant action (rows of ``actions``) on each
+    episode seed: shape (len(actions), len(episode_seeds)); one vector env with a
+    lane per (action, episode), action-major."""
+    actions = np.asarray(actions, dtype=np.float32)
+    lanes = np.repeat(actions, len(episode_seeds), axis=0)
+    err = first_episode_errors(
+        env_id, lambda obs: lanes, list(episode_seeds) * len(actions), env_kwargs
+    )
+    return err.reshape(len(actions), len(episode_seeds))
+
+
+def _errors_task(job: tuple[str, np.ndarray, list[int], dict[str, Any] | None]) -> np.ndarray:
+    return constant_action_errors(*job)
 
 
 def search(
@@ -60,13 +128,22 @@ def search(
     sigma0: float = 0.4,
     seed: int = 1,
     env_kwargs: dict[str, Any] | None = None,
-    save: bool = True,
+    map_fn: MapFn = lambda fn, items: list(map(fn, items)),
+    n_tasks: int = 1,
+    on_generation: Callable[[int], None] | None = None,
 ) -> dict[str, Any]:
-    """CMA-ES over constant actions; returns (and by default ships) the result."""
+    """CMA-ES over constant actions; returns the result (``save_result`` writes it).
+
+    Each generation's candidates are split into ``n_tasks`` groups run through
+    ``map_fn`` (e.g. a Ray backend's ``map``); ``on_generation(1)`` is called after
+    each generation and after the final paper-action evaluation.
+    """
     import cma
 
     if episodes < 1 or generations < 1 or popsize < 2:
         raise ValueError("episodes, generations ≥ 1 and popsize ≥ 2 are required")
+    if n_tasks < 1:
+        raise ValueError(f"n_tasks must be ≥ 1, got {n_tasks}")
     ep_seeds = [SEARCH_SEED + i for i in range(episodes)]
     es = cma.CMAEvolutionStrategy(
         np.zeros(action_dim),
@@ -77,18 +154,18 @@ def search(
     start = time.perf_counter()
     for _ in range(generations):
         cands = np.asarray(es.ask())
-        lanes = np.repeat(cands, episodes, axis=0)  # candidate-major
-        err = first_episode_errors(
-            env_id, lambda obs, a=lanes: a.astype(np.float32), ep_seeds * len(cands), env_kwargs
-        )
-        scores = err.reshape(len(cands), episodes).mean(axis=1)
+        groups = [g for g in np.array_split(cands, min(n_tasks, len(cands))) if len(g)]
+        parts = map_fn(_errors_task, [(env_id, g, ep_seeds, env_kwargs) for g in groups])
+        scores = np.concatenate(list(parts)).mean(axis=1)
         es.tell(list(cands), scores.tolist())
         history.append(float(scores.min()))
-    paper = first_episode_errors(
-        env_id, lambda obs: np.zeros((len(obs), action_dim), np.float32), ep_seeds, env_kwargs
-    )
+        if on_generation is not None:
+            on_generation(1)
+    paper = constant_action_errors(env_id, np.zeros((1, action_dim)), ep_seeds, env_kwargs)
+    if on_generation is not None:
+        on_generation(1)
     best = np.clip(np.asarray(es.result.xbest), -1, 1)
-    result = {
+    return {
         "action": best.tolist(),
         "objective_m": float(es.result.fbest),
         "paper_objective_m": float(paper.mean()),
@@ -101,8 +178,3 @@ def search(
         "seconds": round(time.perf_counter() - start, 1),
         "env_kwargs": {k: repr(v) for k, v in (env_kwargs or {}).items()},
     }
-    if save:
-        table = json.loads(RESULTS_FILE.read_text()) if RESULTS_FILE.exists() else {}
-        table[env_id] = result
-        RESULTS_FILE.write_text(json.dumps(table, indent=2) + "\n")
-    return result

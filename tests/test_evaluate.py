@@ -2,6 +2,7 @@
 
 import json
 import time
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -10,10 +11,10 @@ import pytest
 from agents.bench.timing import bench_native_vs_reference
 from agents.cli import main
 from agents.evaluate import evaluate, load_policy, run_episodes
-from agents.sb3_vec import NativeVecEnv
 from baselines import PaperPolicy
 from pednav_env.envs.foot_core import FootZuptConfig
 from pednav_env.gait.foot_route import RouteRandomization
+from pednav_env.sb3 import NativeVecEnv
 
 ENV_ID = "pednav/FootZupt-v0"
 SHORT = {"config": FootZuptConfig(route=RouteRandomization(duration_s=(10.0, 15.0)))}
@@ -58,7 +59,8 @@ def test_evaluate_json_has_the_contract_keys_and_paired_stats(tmp_path):
     model.learn(64)
     path = tmp_path / "tiny.zip"
     model.save(path)
-    out = evaluate(ENV_ID, ["paper", str(path)], 3, 5000, SHORT)
+    with pytest.warns(UserWarning, match="no vecnormalize.pkl beside it"):
+        out = evaluate(ENV_ID, ["paper", str(path)], 3, 5000, SHORT)
     assert set(out) == {"env", "episodes", "seed", "policies"}
     assert out["env"] == ENV_ID and out["episodes"] == 3 and out["seed"] == 5000
     names = [p["name"] for p in out["policies"]]
@@ -108,9 +110,49 @@ def test_cli_evaluate_and_errors(capsys, tmp_path):
     out = json.loads(capsys.readouterr().out)
     assert out["policies"][0]["name"] == "paper" and out["episodes"] == 2
     assert main(["evaluate", ENV_ID, "--policy", "oracle", "--episodes", "1"]) == 2
-    assert "unknown policy" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "unknown policy 'oracle'" in err and err.count("\n") == 1
+    for name in ("paper", "tuned", "adaptive", "pretrained"):
+        assert name in err
+    assert "real-fixed" not in err  # pednav run's setup, not an evaluate policy
     with pytest.raises(ValueError, match="no such model"):
         load_policy("missing.zip", gym.make(ENV_ID).action_space)
+
+
+def test_unknown_policy_in_pednav_run_lists_real_fixed():
+    from agents.policies import load_policy as load
+    from pednav_env.replay.setup import SETUP_NAMES
+
+    space = gym.make(ENV_ID).action_space
+    with pytest.raises(ValueError, match="unknown policy") as exc:
+        load("bogus", space, ENV_ID, other_names=SETUP_NAMES)
+    for name in ("paper", "tuned", "adaptive", "pretrained", "real-fixed"):
+        assert name in str(exc.value)
+
+
+REPLAY_DATA = Path(__file__).parent / "data" / "replay"
+
+
+def test_replay_env_evaluates_with_recordings_and_rejects_a_scenario(capsys):
+    """The documented `pednav evaluate pednav/FootZuptReplay-v0 --policy paper` works
+    with --recordings DIR; --scenario (an option the replay env lacks) is one line."""
+    replay = "pednav/FootZuptReplay-v0"
+    args = ["evaluate", replay, "--policy", "paper", "tuned", "--episodes", "2", "--json"]
+    assert main([*args, "--recordings", str(REPLAY_DATA)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["env"] == replay and [p["name"] for p in out["policies"]] == ["paper", "tuned"]
+    # the simulated env's tuned action is played (same knobs), so it differs from paper
+    assert out["policies"][1]["vs_paper"]["mean_diff"] != 0.0
+    assert main([*args, "--env-kwarg", f"data_dir={REPLAY_DATA}"]) == 0
+    assert json.loads(capsys.readouterr().out) == out
+    assert main([*args, "--scenario", str(REPLAY_DATA)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("pednav: error: pednav/FootZuptReplay-v0 has no option 'scenario'")
+    assert "data_dir" in err and err.count("\n") == 1
+    assert main([*args[:-1], "--recordings", str(REPLAY_DATA / "nope")]) == 2
+    assert "not a directory" in capsys.readouterr().err
+    assert main([*args, "--env-kwarg", "data_dir"]) == 2
+    assert "KEY=VALUE" in capsys.readouterr().err
 
 
 def test_paper_policy_shapes():

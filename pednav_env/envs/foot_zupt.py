@@ -33,7 +33,7 @@ class FootZuptEnv(NativeScalarEnv):
     60–180 s with turns, stops (standing for 1–8 s) and gait changes between
     slow walking, walking, fast walking and running; stance is not perfectly
     still at speed (roll-over and micro-motion) and heel strikes shake the
-    IMU; the IMU grade is paper 003's, ADIS16405-like or consumer-grade with
+    IMU; the IMU grade is paper 003's, ADIS16470-like or consumer-grade with
     random biases, scale factors and misalignments. ``scenario="paper"`` gives
     paper 003's 5 m square with 1 m strides and its IMU.
 

@@ -6,6 +6,11 @@ generator). Evaluation uses the first episode of generators seeded in
 ``[0, TRAIN_SEED_BASE)``; training and the tuned-fixed search use only
 generators seeded at ``TRAIN_SEED_BASE`` and above, so no training episode is
 ever an evaluation episode.
+
+A training *run seed* r ∈ [0, MAX_RUN_SEED) owns the block of lane seeds
+``TRAIN_SEED_BASE + r · LANES_PER_RUN + [0, LANES_PER_RUN)``
+(:func:`training_seed`); :class:`pednav_env.sb3.NativeVecEnv` maps SB3's
+``seed(r)`` (what ``PPO(seed=r)`` calls) into that block.
 """
 
 from __future__ import annotations
@@ -14,6 +19,8 @@ from __future__ import annotations
 TRAIN_SEED_BASE = 1_000_000
 #: Seeds of training run ``seed``: TRAIN_SEED_BASE + seed · LANES_PER_RUN + lane.
 LANES_PER_RUN = 10_000
+#: Training run seeds are 0 … MAX_RUN_SEED − 1.
+MAX_RUN_SEED = 10_000
 #: The tuned-fixed search evaluates candidates on these seeds (training side).
 SEARCH_SEED = 900_000_000  # tuned-fixed search episodes (training side)
 
@@ -29,6 +36,6 @@ def check_evaluation_seeds(seed: int, episodes: int) -> None:
 
 def training_seed(run_seed: int) -> int:
     """First lane seed of training run ``run_seed`` (≥ TRAIN_SEED_BASE)."""
-    if not 0 <= run_seed < 10_000:
-        raise ValueError(f"seed must be in [0, 10000) for training, got {run_seed}")
+    if not 0 <= run_seed < MAX_RUN_SEED:
+        raise ValueError(f"seed must be in [0, {MAX_RUN_SEED}) for training, got {run_seed}")
     return TRAIN_SEED_BASE + run_seed * LANES_PER_RUN
