@@ -3,9 +3,10 @@
 Evaluation batches (one policy on up to 128 consecutive seeds), CMA-ES
 candidates of one generation, and the runs of a multi-seed training are
 independent of each other; each unit's result depends only on its own inputs
-(seeds, policy, configuration). A backend maps a function over such units and
-returns the results in the units' order, so the serial and the Ray backend give
-identical results.
+(seeds, policy, configuration), and units that run a network do it on one
+PyTorch thread (:func:`one_torch_thread`). A backend maps a function over such
+units and returns the results in the units' order, so the serial and the Ray
+backend give identical results.
 
 - :class:`SerialBackend`: one unit after the other, in this process.
 - :class:`RayBackend`: one Ray task per unit (``num_cpus=1`` each). Without an
@@ -20,10 +21,32 @@ Ray is an optional dependency (``pip install 'pednav[ray]'``).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any, Protocol
 
 BACKENDS = ("serial", "ray")
+
+
+@contextmanager
+def one_torch_thread() -> Iterator[None]:
+    """Run the body with PyTorch on one CPU thread (restored after).
+
+    With several threads PyTorch may split a matrix product, and the number of
+    threads can then change the order of its sums; units of work that run a
+    network (training, playing a learned policy) use one thread, so that neither
+    the machine's core count nor parallel tasks change a result, and parallel
+    tasks do not oversubscribe the cores. One thread is also the fast choice for
+    the small MLPs of these tuners.
+    """
+    import torch
+
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
 
 
 class Backend(Protocol):
@@ -80,6 +103,7 @@ class RayBackend:
             raise ValueError(f"num_cpus must be ≥ 1, got {num_cpus}")
         self._ray = ray
         if not ray.is_initialized():
+            runtime_env: dict[str, Any] = {"env_vars": _thread_env()}
             kwargs: dict[str, Any] = {
                 "include_dashboard": False,
                 "logging_level": "warning",
@@ -89,7 +113,8 @@ class RayBackend:
                 kwargs["num_cpus"] = num_cpus
             else:
                 kwargs["address"] = address
-                kwargs["runtime_env"] = {"py_modules": _project_packages()}
+                runtime_env["py_modules"] = _project_packages()
+            kwargs["runtime_env"] = runtime_env
             try:
                 ray.init(**kwargs)
             except ConnectionError as exc:
@@ -120,6 +145,20 @@ class RayBackend:
                 ray.cancel(ref)
             cause = exc.cause if isinstance(exc.cause, Exception) else exc
             raise cause from None
+
+
+def _thread_env() -> dict[str, str]:
+    """This process's thread counts for the workers' OpenMP/MKL runtimes.
+
+    Ray starts each worker with ``OMP_NUM_THREADS=1``; PyTorch's CPU kernels started
+    that way round a network's training differently (in the last bits) from a
+    process started with several threads, even when both compute on one thread
+    (:func:`one_torch_thread`). Workers get this process's setting instead.
+    """
+    import torch
+
+    threads = str(torch.get_num_threads())
+    return {"OMP_NUM_THREADS": threads, "MKL_NUM_THREADS": threads}
 
 
 def _project_packages() -> list[Any]:

@@ -121,7 +121,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
         "resume": args.resume,
     }
     if args.seeds is None:
-        if args.backend != "serial" or args.ray_address is not None:
+        if args.backend != "serial" or args.ray_address or args.ray_cpus:
             raise ValueError("--backend ray runs several training seeds: give --seeds S [S ...]")
         run_dir = train(
             args.env_id,
@@ -133,10 +133,11 @@ def _cmd_train(args: argparse.Namespace) -> int:
         )
         print(f"saved {run_dir / 'model.zip'} (+ vecnormalize.pkl, meta.json)")
         return 0
-    from agents.progress import progress_bar
+    from agents.progress import progress_bar, wanted
 
     backend = _backend(args)
-    with progress_bar("training runs", len(args.seeds), not args.no_progress) as advance:
+    bar = wanted(False) and not args.no_progress
+    with progress_bar("training runs", len(args.seeds), bar) as advance:
         run_dirs = train_seeds(
             args.env_id,
             args.algo,

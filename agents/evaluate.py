@@ -39,6 +39,7 @@ from scipy import stats
 from stable_baselines3.common.evaluation import evaluate_policy
 
 import pednav_env  # noqa: F401  (registers the environments)
+from agents.backends import one_torch_thread
 from agents.policies import BUILTIN_POLICIES, load_policy
 from baselines import PaperPolicy
 from pednav_env.sb3 import NativeVecEnv
@@ -140,9 +141,10 @@ def play_batch(
             if on_episode is not None:
                 on_episode(1)
 
-    evaluate_policy(
-        batch.policy, vec, n_eval_episodes=n, deterministic=True, warn=False, callback=record
-    )
+    with one_torch_thread():
+        evaluate_policy(
+            batch.policy, vec, n_eval_episodes=n, deterministic=True, warn=False, callback=record
+        )
     vec.close()
     return [lane[i] for i in range(n)]
 

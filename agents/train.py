@@ -36,6 +36,7 @@ import gymnasium as gym
 import yaml
 
 import pednav_env  # noqa: F401  (registers the environments)
+from agents.backends import one_torch_thread
 from pednav_env.sb3 import NativeVecEnv
 from pednav_env.seeds import training_seed
 
@@ -135,13 +136,14 @@ def train(
     )
     remaining = timesteps - (model.num_timesteps if latest is not None else 0)
     start = time.perf_counter()
-    model.learn(
-        max(remaining, 0),
-        callback=callback,
-        progress_bar=progress_bar,
-        reset_num_timesteps=latest is None,
-        tb_log_name=algo,
-    )
+    with one_torch_thread():  # the same weights in any process (agents.backends)
+        model.learn(
+            max(remaining, 0),
+            callback=callback,
+            progress_bar=progress_bar,
+            reset_num_timesteps=latest is None,
+            tb_log_name=algo,
+        )
     seconds = time.perf_counter() - start
     model.save(run_dir / "model.zip")
     vec.save(str(run_dir / "vecnormalize.pkl"))

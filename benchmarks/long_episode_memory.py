@@ -1,4 +1,4 @@
-"""An 84.4-minute FootZupt episode (one Schuler period, DESIGN.md): memory must stay flat.
+"""An 84.4-minute FootZupt episode (one Schuler period): memory must stay flat.
 
 Walking gaits and the ADIS16470-like grade with no error bound, so that the
 walk runs to its end. Prints steps, wall time, peak RSS and the traced Python

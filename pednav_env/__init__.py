@@ -1,6 +1,6 @@
 """pednav_env — gait-aware pedestrian navigation environments.
 
-Conventions (DESIGN.md):
+Conventions (docs/CONVENTIONS.md):
 
 - SI units inside; angles in radians; a name with another unit says it
   (``rate_hz``, ``heading_deg``). Gravity g = 9.80665 m/s² unless a paper

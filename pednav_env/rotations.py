@@ -1,6 +1,6 @@
 """Attitude algebra, batched over any leading axes.
 
-Conventions (DESIGN.md): navigation frame east-north-up; body frame x
+Conventions (docs/CONVENTIONS.md): navigation frame east-north-up; body frame x
 forward, y left, z up; quaternions ``q_nb`` rotate body vectors into the
 navigation frame, scalar first, Hamilton product. Euler angles are paper
 003's yaw ψ, pitch θ, roll γ in the 3-2-1 order (its eq 1)::

@@ -82,9 +82,11 @@ def test_tune_on_ray_equals_serial(ray_backend):
 
 
 def test_train_seeds_on_ray_equals_serial(ray_backend, tmp_path):
-    hp = {"n_steps": 32, "batch_size": 32, "n_epochs": 1, "policy_kwargs": {"net_arch": [16]}}
+    # A network and batch big enough for PyTorch's kernel choice to matter: with the
+    # workers' default OMP_NUM_THREADS=1 these weights differ in the last bits.
+    hp = {"n_steps": 64, "batch_size": 128, "n_epochs": 2, "policy_kwargs": {"net_arch": [64, 64]}}
     hp |= {"env_kwargs": {"config": SHORT}, "checkpoint_steps": 10_000}
-    kwargs = {"timesteps": 128, "n_envs": 2, "hyperparams": hp}
+    kwargs = {"timesteps": 256, "n_envs": 2, "hyperparams": hp}
     serial = train_seeds(ENV_ID, "ppo", [4, 5], tmp_path / "serial", **kwargs)
     ray = train_seeds(ENV_ID, "ppo", [4, 5], tmp_path / "ray", backend=ray_backend, **kwargs)
     assert [p.name for p in ray] == [p.name for p in serial] == ["ppo_seed4", "ppo_seed5"]

@@ -1,6 +1,6 @@
 """A long episode runs with flat memory: nothing grows per step.
 
-(The 84.4-minute episode of DESIGN.md runs in benchmarks/long_episode_memory.py;
+(The 84.4-minute episode (one Schuler period) runs in benchmarks/long_episode_memory.py;
 this is a 5-minute one so that the suite stays fast.)
 """
 

@@ -86,11 +86,11 @@ class MarkerTrackConfig(EnvConfig):
 
     ``scenario``: ``"random"`` (domain randomisation) or ``"paper"`` (paper
     001's setup: eq 4.10 taken literally, 10 s walks, σ = 0.1 m, 10 Hz; the
-    reproduction's headline scenario, docs/REPRODUCTION_001.md).
+    reproduction's headline scenario, docs/REPRODUCTION.md, paper 001).
     """
 
     scenario: str = "random"
-    decision_interval_s: float = 0.5  # DESIGN.md default
+    decision_interval_s: float = 0.5  # ours, as every env's (docs/CONTRACTS.md)
     rate_hz: float = 10.0  # ours: DecaWave TWR RTLS rate, as paper001
     #: Random scenario: walk duration range (s); ours, as the foot env's walks.
     duration_s: tuple[float, float] = (60.0, 180.0)

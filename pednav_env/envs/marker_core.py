@@ -33,7 +33,7 @@ Two things the thesis does not need for its 10 s walks are handled here:
   accumulated before t_a' is dropped (the paper's 6-state has no place for
   it). The paper scenario never re-anchors (its walks are the thesis's 10 s).
 - **Lock loss.** The thesis's EKF can lock onto another cycle of the gait
-  harmonic or lose the trend (docs/REPRODUCTION_001.md, mechanism E); it
+  harmonic or lose the trend (docs/REPRODUCTION.md, paper 001, mechanism E); it
   does not recover. A lane terminates (divergence) when its state or
   covariance is not finite, when its cadence estimate ω̂ = ω₀ + Δω̂ leaves
   ``cadence_bounds`` × ω₀, or when the interval's RMS marker error exceeds

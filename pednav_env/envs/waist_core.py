@@ -76,7 +76,7 @@ Array = NDArray[np.float64]
 class Knob:
     """One action component: ``a`` ∈ [−1, 1] → physical value.
 
-    ``mapping="log"``: ``base · span ** a`` (DESIGN.md). ``"linear"``:
+    ``mapping="log"``: ``base · span ** a`` (docs/CONTRACTS.md). ``"linear"``:
     ``span · a``; ``"linear_positive"``: ``span · max(a, 0)`` (a ≤ 0 keeps the
     paper's 0, as the foot env's minimum-stance knob). In every case a = 0 gives
     paper 004's value.
@@ -292,7 +292,7 @@ class WaistStepConfig:
     """
 
     scenario: str = "random"
-    decision_interval_s: float = 0.5  # DESIGN.md
+    decision_interval_s: float = 0.5  # ours, as every env's (docs/CONTRACTS.md)
     rate_hz: float = 100.0  # paper 000
     randomization: WaistRandomization = field(default_factory=WaistRandomization)
     sensor_grades: tuple[str, ...] = ("paper004", "tactical", "industrial", "consumer")

@@ -23,7 +23,7 @@ moves the new stance foot off the previous ground line by the difference
 (the model has no transition phase); with constant parameters all feet lie
 on the slope line.
 
-Embedding in 3-D (DESIGN.md frames, east-north-up): the hip moves along the
+Embedding in 3-D (the frames of docs/CONVENTIONS.md, east-north-up): the hip moves along the
 horizontal direction ψ_k (yaw, counter-clockwise from east) during step k;
 the waist IMU is level (pitch = roll = 0) and its yaw turns from ψ_{k−1} to
 ψ_k during step k along ψ_{k−1} + Δψ (1 − cos πτ)/2, τ = (t − t_k)/T_k, so

@@ -15,7 +15,7 @@ period of 1.29 s):
 Frames. The paper's O₀x₀y₀z₀ has y₀ up and the robot leaving O₀ along z₀;
 its IMU axes a_x (lateral, to the left), a_y (up), a_z (forward), and its
 Euler sequence is yaw ψ about a_y, pitch ϑ about a_x, roll γ about a_z with
-the rate relation (9). This module uses the DESIGN.md frames instead —
+the rate relation (9). This module uses the project's frames (docs/CONVENTIONS.md) instead —
 east-north-up, body x forward / y left / z up, [ψ, θ, γ] of
 :mod:`pednav_env.rotations` — through the proper rotations
 

@@ -1,7 +1,7 @@
 """Waist-IMU dead reckoning pieces of papers 000, 002 and 004, batched over walkers.
 
 - :func:`euler_dead_reckoning` — paper 002's uncorrected strapdown scheme,
-  steps 6–9, eqs (14)–(17), written in the DESIGN.md frames (the mapping of
+  steps 6–9, eqs (14)–(17), written in our frames (docs/CONVENTIONS.md) (the mapping of
   the paper's axes is in :mod:`pednav_env.gait.robot`).
 - :func:`detect_steps` — step boundaries as upward crossings of |f| − g
   (paper 004: "the moment of transition through zero of the difference of
@@ -45,7 +45,7 @@ def _check_dt(dt: float) -> float:
 def euler_rates_from_body(euler: ArrayLike, omega_b: ArrayLike) -> Array:
     """[ψ̇, θ̇, γ̇] from body rates: the inverse of paper 002's eq (9) matrix.
 
-    In the DESIGN.md axes (paper 002's a_x, a_y, a_z = our y, z, x)::
+    In our axes (paper 002's a_x, a_y, a_z = our y, z, x)::
 
         ψ̇ = (ω_y sin γ + ω_z cos γ) / cos θ
         θ̇ = ω_y cos γ − ω_z sin γ

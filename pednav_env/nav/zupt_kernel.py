@@ -29,9 +29,10 @@ of :mod:`pednav_env.nav.zupt_ukf` describes:
    accumulates D, A, B once per sample and moves the 19 points only at a ZUPT
    and at the end of the block.
 
-Why compiled code here, against DESIGN.md's "one numpy call chain": a ZUPT
-happens at data-dependent samples of each walker (stance detection flickers
-on consumer-grade IMUs, up to 20 boundaries per walker and 0.5 s interval),
+Why compiled code here, against the rule of one batched numpy call chain
+(docs/CONVENTIONS.md): a ZUPT happens at data-dependent samples of each
+walker (stance detection flickers on consumer-grade IMUs, up to 20
+boundaries per walker and 0.5 s interval),
 so a batched numpy engine must run the updates in rounds across walkers with
 a fixed per-call cost; that cost, not arithmetic, bounded its throughput
 (docs/PERFORMANCE.md). The kernel is still the one implementation of the

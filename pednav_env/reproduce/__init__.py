@@ -2,7 +2,7 @@
 
 Each module ``paperNNN`` exposes ``run(runs: int | None = None, seed: int = 0,
 **kw) -> ReproductionResult``. ``pednav reproduce ID`` prints the table and,
-with ``--json``, the object fixed by DESIGN.md ("Reproduction output")::
+with ``--json``, the object described in docs/CONTRACTS.md ("pednav reproduce")::
 
     {"paper": "003", "seconds": 12.3,
      "rows": [{"config": "table1_step_0.5m", "metric": "sigma_x", "unit": "m",
@@ -48,7 +48,7 @@ class ReproductionResult:
     notes: list[str] = field(default_factory=list)
 
     def to_json_dict(self) -> dict[str, Any]:
-        """The DESIGN.md JSON object (notes are not part of the contract)."""
+        """The JSON object of docs/CONTRACTS.md (notes are not part of it)."""
         return {
             "paper": self.paper,
             "seconds": round(self.seconds, 3),

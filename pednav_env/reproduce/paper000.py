@@ -8,7 +8,7 @@ integrated numerically from the known initial conditions.
 Integration rule: nested running integrals by the trapezoid rule on the 51
 samples of the closed step (V = V(0) + cumtrapz(a), then trapz(V)), the
 reading that reproduces the printed V̄^ЧП = 1.39994406 and V̄^МОД =
-1.39999891 m/s to all eight digits. Config ``paper`` rows (DESIGN.md):
+1.39999891 m/s to all eight digits. Config ``paper`` rows (docs/CONTRACTS.md):
 ``vbar_true``, ``vbar_from_ax``, ``vbar_from_h`` (m/s), ``max_velocity_error``
 (m/s) and ``max_position_error`` (m) — the largest deviation of the
 numerically integrated velocity / position of the hip (both axes, all

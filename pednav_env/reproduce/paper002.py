@@ -1,6 +1,6 @@
 """Paper 002 reproduction: uncorrected waist strapdown on the walking robot.
 
-Contract rows (DESIGN.md): the printed scheme (9)–(17) — Euler-angle
+Contract rows (docs/CONTRACTS.md): the printed scheme (9)–(17) — Euler-angle
 integration at T = 0.025 s with the kinematic matrix of eq (14) evaluated at
 the previous attitude — on the continuous-time robot of
 :mod:`pednav_env.gait.robot`, ideal sensors:
