@@ -106,7 +106,7 @@ class RayBackend:
             runtime_env: dict[str, Any] = {"env_vars": _thread_env()}
             kwargs: dict[str, Any] = {
                 "include_dashboard": False,
-                "logging_level": "warning",
+                "logging_level": "error",
                 "log_to_driver": False,
             }
             if address is None:
