@@ -89,9 +89,9 @@ class EpisodeBatch:
     env_kwargs: dict[str, Any]
 
 
-def check_env_kwargs(env_id: str, env_kwargs: dict[str, Any]) -> None:
-    """ValueError naming the environment or option when ``env_id`` is not registered
-    or its constructor does not take an option of ``env_kwargs``."""
+def env_options(env_id: str) -> list[str] | None:
+    """The keyword arguments the constructor of ``env_id`` takes (None when it does not
+    say); ValueError naming ``env_id`` when it is not registered."""
     try:
         spec = gym.spec(env_id)
     except gym.error.Error:
@@ -100,13 +100,24 @@ def check_env_kwargs(env_id: str, env_kwargs: dict[str, Any]) -> None:
     creator = spec.entry_point
     if isinstance(creator, str):
         creator = load_env_creator(creator)
+    declared = getattr(creator, "arguments", None)  # the native envs list theirs
+    if declared is not None:
+        return sorted({"config", "render_mode", *declared})
     params = inspect.signature(creator).parameters
     if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return None
+    return sorted(k for k in params if k != "self")
+
+
+def check_env_kwargs(env_id: str, env_kwargs: dict[str, Any]) -> None:
+    """ValueError naming the environment or option when ``env_id`` is not registered
+    or its constructor does not take an option of ``env_kwargs``."""
+    options = env_options(env_id)
+    if options is None:
         return
     for key in env_kwargs:
-        if key not in params:
-            options = ", ".join(sorted(k for k in params if k != "self"))
-            raise ValueError(f"{env_id} has no option {key!r}; its options: {options}")
+        if key not in options:
+            raise ValueError(f"{env_id} has no option {key!r}; its options: {', '.join(options)}")
 
 
 def play_batch(
@@ -217,7 +228,7 @@ def summarize(name: str, res: list[EpisodeResult], paper: list[EpisodeResult]) -
 
 def decision_interval_s(env: gym.Env) -> float | None:
     """Seconds of data per env step, when the env's configuration says."""
-    config = getattr(getattr(env.unwrapped, "core", None), "config", None)
+    config = getattr(env.unwrapped, "config", None)
     value = getattr(config, "decision_interval_s", None)
     return float(value) if value is not None else None
 
