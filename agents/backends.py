@@ -3,10 +3,11 @@
 Evaluation batches (one policy on up to 128 consecutive seeds), CMA-ES
 candidates of one generation, and the runs of a multi-seed training are
 independent of each other; each unit's result depends only on its own inputs
-(seeds, policy, configuration), and units that run a network do it on one
-PyTorch thread (:func:`one_torch_thread`). A backend maps a function over such
-units and returns the results in the units' order, so the serial and the Ray
-backend give identical results.
+(seeds, policy, configuration) and, for a network's last bits, on PyTorch's
+thread setting, which Ray workers take from this process (training runs on one
+thread, :func:`one_torch_thread`). A backend maps a function over such units and
+returns the results in the units' order, so the serial and the Ray backend give
+identical results.
 
 - :class:`SerialBackend`: one unit after the other, in this process.
 - :class:`RayBackend`: one Ray task per unit (``num_cpus=1`` each). Without an
@@ -33,11 +34,12 @@ def one_torch_thread() -> Iterator[None]:
     """Run the body with PyTorch on one CPU thread (restored after).
 
     With several threads PyTorch may split a matrix product, and the number of
-    threads can then change the order of its sums; units of work that run a
-    network (training, playing a learned policy) use one thread, so that neither
-    the machine's core count nor parallel tasks change a result, and parallel
-    tasks do not oversubscribe the cores. One thread is also the fast choice for
-    the small MLPs of these tuners.
+    threads can then change the order of its sums. Training runs in this context,
+    so that its weights do not depend on the machine's core count and parallel
+    runs do not oversubscribe the cores; one thread is also the fast choice for
+    the small MLPs of these tuners. (Playing a learned policy keeps the process's
+    threads, so evaluation figures stay what they were; Ray workers get this
+    process's thread setting, see :func:`_thread_env`.)
     """
     import torch
 
@@ -151,9 +153,9 @@ def _thread_env() -> dict[str, str]:
     """This process's thread counts for the workers' OpenMP/MKL runtimes.
 
     Ray starts each worker with ``OMP_NUM_THREADS=1``; PyTorch's CPU kernels started
-    that way round a network's training differently (in the last bits) from a
-    process started with several threads, even when both compute on one thread
-    (:func:`one_torch_thread`). Workers get this process's setting instead.
+    that way round a network's outputs and training differently (in the last bits)
+    from a process started with several threads, even when both train on one
+    thread (:func:`one_torch_thread`). Workers get this process's setting instead.
     """
     import torch
 

@@ -39,7 +39,6 @@ from scipy import stats
 from stable_baselines3.common.evaluation import evaluate_policy
 
 import pednav_env  # noqa: F401  (registers the environments)
-from agents.backends import one_torch_thread
 from agents.policies import BUILTIN_POLICIES, load_policy
 from baselines import PaperPolicy
 from pednav_env.sb3 import NativeVecEnv
@@ -152,10 +151,9 @@ def play_batch(
             if on_episode is not None:
                 on_episode(1)
 
-    with one_torch_thread():
-        evaluate_policy(
-            batch.policy, vec, n_eval_episodes=n, deterministic=True, warn=False, callback=record
-        )
+    evaluate_policy(
+        batch.policy, vec, n_eval_episodes=n, deterministic=True, warn=False, callback=record
+    )
     vec.close()
     return [lane[i] for i in range(n)]
 
