@@ -147,10 +147,7 @@ class FootZuptVectorEnv(NativeVectorEnv):
     """Native vector version of :class:`FootZuptEnv` (see its docstring):
     one batched filter for all ``num_envs`` walks, SAME_STEP autoreset."""
 
-    env_id = ENV_ID
-    core_cls = FootZuptCore
-    config_cls = FootZuptConfig
-    arguments = FootZuptEnv.arguments
+    scalar_env = FootZuptEnv
 
     def lane_info(self) -> dict[str, np.ndarray]:
         return {"imu_grade": np.array(self.core.grade, dtype=object)}

@@ -177,10 +177,7 @@ class MarkerTrackVectorEnv(NativeVectorEnv):
     """Native vector version of :class:`MarkerTrackEnv` (see its docstring):
     one batched filter for all ``num_envs`` walks, SAME_STEP autoreset."""
 
-    env_id = ENV_ID
-    core_cls = MarkerTrackCore
-    config_cls = MarkerTrackConfig
-    arguments = MarkerTrackEnv.arguments
+    scalar_env = MarkerTrackEnv
 
     def lane_info(self) -> dict[str, np.ndarray]:
         return {"uwb_condition": self.core.condition.copy()}

@@ -191,10 +191,22 @@ def lane_spaces(core: Core, action_dim: int) -> tuple[spaces.Box, spaces.Box]:
 
 
 class NativeVectorEnv(EnvFront, VectorEnv):
-    """Base class of the vector envs: ``num_envs`` lanes of ``core_cls``."""
+    """Base class of the vector envs: ``num_envs`` lanes of ``core_cls``.
+
+    A subclass names its scalar env as ``scalar_env`` and gets that env's
+    ``env_id``, ``core_cls``, ``config_cls``, ``arguments`` and ``action_dim``.
+    """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+    scalar_env: ClassVar[type[NativeScalarEnv]]
     _lane_rngs: list[np.random.Generator] | None = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        scalar = cls.__dict__.get("scalar_env")
+        if scalar is not None:
+            for name in ("env_id", "core_cls", "config_cls", "arguments", "action_dim"):
+                setattr(cls, name, getattr(scalar, name))
 
     def __init__(
         self,

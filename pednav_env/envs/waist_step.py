@@ -169,13 +169,7 @@ class WaistStepVectorEnv(NativeVectorEnv):
     """Native vector version of :class:`WaistStepEnv` (see its docstring):
     one batched detector and filter for all ``num_envs`` walks, SAME_STEP autoreset."""
 
-    env_id = ENV_ID
-    core_cls = WaistStepCore
-    config_cls = WaistStepConfig
-    arguments = WaistStepEnv.arguments
-
-    def action_dim(self) -> int:
-        return ACTION_DIM
+    scalar_env = WaistStepEnv
 
     def lane_info(self) -> dict[str, np.ndarray]:
         return {"sensor_grade": np.array(self.core.grade, dtype=object)}
