@@ -51,7 +51,7 @@ from gymnasium import spaces
 
 from pednav_env.envs.foot_core import ACTION_KNOBS, OBS_FEATURES
 
-_IDX = {name: i for i, (name, _, _) in enumerate(OBS_FEATURES)}
+_IDX = {f.name: i for i, f in enumerate(OBS_FEATURES)}
 _K = len(OBS_FEATURES)
 
 
@@ -96,12 +96,10 @@ class InnovationAdaptivePolicy:
         omega_max = np.clip(self.omega_factor * moving, 0.05, 2.0)
         delta_f = np.clip(self.accel_factor * obs[:, _IDX["accel_excess_std"]], 0.1, 3.0)
         still = moving < 0.3
-        base_w, span_w = ACTION_KNOBS[0][1], ACTION_KNOBS[0][2]
-        base_f, span_f = ACTION_KNOBS[1][1], ACTION_KNOBS[1][2]
-        a[:, 0] = np.where(still, 0.0, np.log(omega_max / base_w) / np.log(span_w))
-        a[:, 1] = np.where(still, 0.0, np.log(delta_f / base_f) / np.log(span_f))
+        a[:, 0] = np.where(still, 0.0, ACTION_KNOBS[0].action(omega_max))
+        a[:, 1] = np.where(still, 0.0, ACTION_KNOBS[1].action(delta_f))
         log_nis = obs[:, _IDX["log_nis_interval"]]
-        step = _nis_step(log_nis, 4.0, ACTION_KNOBS[2][2], self.eta)
+        step = _nis_step(log_nis, 4.0, ACTION_KNOBS[2].span, self.eta)
         a[:, 2] = np.where(log_nis > 0, current[:, 2] + step, current[:, 2])
         return a
 

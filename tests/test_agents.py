@@ -214,7 +214,7 @@ def test_tune_writes_a_run_dir_and_installs_only_when_asked(tmp_path, monkeypatc
 def test_adaptive_rule_reacts_to_innovations_and_motion():
     space = gym.make(ENV_ID).action_space
     pol = InnovationAdaptivePolicy(space)
-    idx = {n: i for i, (n, _, _) in enumerate(OBS_FEATURES)}
+    idx = {f.name: i for i, f in enumerate(OBS_FEATURES)}
     obs = np.zeros((3, 20), np.float32)
     obs[:, idx["log_nis_interval"]] = np.log1p([40.0, 4.0, 0.4])  # NIS 10x, 1x, 0.1x expected
     obs[:, idx["gyro_norm_mean"]] = [0.05, 2.0, 6.0]  # still, walking, running

@@ -22,6 +22,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from pednav_env.envs.spec import (
+    EnvConfig,
+    Knob,
+    ObsFeature,
+    obs_bounds,
+    require_weights,
+    validate_action,
+)
 from pednav_env.gait.foot import FootSimConfig, simulate_foot
 from pednav_env.gait.foot_route import (
     RouteRandomization,
@@ -35,42 +43,42 @@ from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
 
 Array = NDArray[np.float64]
 
-#: Knobs set by the action: (name, paper base value, span, unit).
+#: Knobs set by the action (log mapping, base · span ** a).
 #: ω_max and Δf_max bases are paper 003's simulation thresholds (see
 #: ThresholdDetectorConfig); the noise scales multiply the paper's Q and R.
-ACTION_KNOBS: tuple[tuple[str, float, float, str], ...] = (
-    ("omega_max", 0.22, 10.0, "rad/s"),
-    ("delta_f_max", 0.33, 10.0, "m/s²"),
-    ("process_noise_scale", 1.0, 100.0, "1"),
-    ("zupt_noise_scale", 1.0, 100.0, "1"),
+ACTION_KNOBS: tuple[Knob, ...] = (
+    Knob("omega_max", "log", 0.22, 10.0, "rad/s"),
+    Knob("delta_f_max", "log", 0.33, 10.0, "m/s²"),
+    Knob("process_noise_scale", "log", 1.0, 100.0, "1"),
+    Knob("zupt_noise_scale", "log", 1.0, 100.0, "1"),
 )
 #: Optional fifth knob: minimum stance duration = MIN_STANCE_MAX_S · max(a, 0)
 #: (linear, so that a = 0 keeps the paper's "no minimum").
 MIN_STANCE_MAX_S = 0.15
 
-#: Observation entries: (name, low, high); documented in the env docstring.
-OBS_FEATURES: tuple[tuple[str, float, float], ...] = (
-    ("gyro_norm_mean", 0.0, 50.0),
-    ("gyro_norm_std", 0.0, 50.0),
-    ("gyro_norm_max", 0.0, 50.0),
-    ("accel_excess_mean", -20.0, 200.0),
-    ("accel_excess_std", 0.0, 200.0),
-    ("accel_excess_absmax", 0.0, 200.0),
-    ("stance_fraction", 0.0, 1.0),
-    ("stance_starts", 0.0, 50.0),
-    ("stance_duration_avg", 0.0, 20.0),
-    ("time_since_zupt", 0.0, 200.0),
-    ("log_nis_last", 0.0, 30.0),
-    ("log_nis_interval", 0.0, 30.0),
-    ("log10_trace_p_pos", -12.0, 8.0),
-    ("log10_trace_p_vel", -12.0, 8.0),
-    ("log10_trace_p_att", -12.0, 8.0),
-    ("zupt_rejected_fraction", 0.0, 1.0),
+#: Observation entries; documented in the env docstring.
+OBS_FEATURES: tuple[ObsFeature, ...] = (
+    ObsFeature("gyro_norm_mean", 0.0, 50.0, "rad/s"),
+    ObsFeature("gyro_norm_std", 0.0, 50.0, "rad/s"),
+    ObsFeature("gyro_norm_max", 0.0, 50.0, "rad/s"),
+    ObsFeature("accel_excess_mean", -20.0, 200.0, "m/s²"),
+    ObsFeature("accel_excess_std", 0.0, 200.0, "m/s²"),
+    ObsFeature("accel_excess_absmax", 0.0, 200.0, "m/s²"),
+    ObsFeature("stance_fraction", 0.0, 1.0, "1"),
+    ObsFeature("stance_starts", 0.0, 50.0, "1"),
+    ObsFeature("stance_duration_avg", 0.0, 20.0, "s"),
+    ObsFeature("time_since_zupt", 0.0, 200.0, "s"),
+    ObsFeature("log_nis_last", 0.0, 30.0, "1"),
+    ObsFeature("log_nis_interval", 0.0, 30.0, "1"),
+    ObsFeature("log10_trace_p_pos", -12.0, 8.0, "log m²"),
+    ObsFeature("log10_trace_p_vel", -12.0, 8.0, "log (m/s)²"),
+    ObsFeature("log10_trace_p_att", -12.0, 8.0, "log rad²"),
+    ObsFeature("zupt_rejected_fraction", 0.0, 1.0, "1"),
 )
 
 
 @dataclass(frozen=True)
-class FootZuptConfig:
+class FootZuptConfig(EnvConfig):
     """Settings of the foot environment (all lanes share them).
 
     ``scenario``: ``"random"`` (domain randomisation) or ``"paper"`` (paper
@@ -94,31 +102,14 @@ class FootZuptConfig:
     divergence_error_fraction: float = 0.25
 
     def __post_init__(self) -> None:
-        if self.scenario not in ("random", "paper"):
-            raise ValueError(f"scenario must be 'random' or 'paper', got {self.scenario!r}")
+        self.check_env_settings(sample="IMU sample")
         if self.filter is None:
             calibrate = self.scenario == "random"
             object.__setattr__(self, "filter", ZuptUkfConfig(calibrate_gyro_bias=calibrate))
-        if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
-            raise ValueError(f"rate_hz must be > 0, got {self.rate_hz!r}")
-        if not (math.isfinite(self.decision_interval_s) and self.decision_interval_s > 0):
-            raise ValueError(f"decision_interval_s must be > 0, got {self.decision_interval_s!r}")
-        if round(self.decision_interval_s * self.rate_hz) < 1:
-            raise ValueError(
-                f"decision_interval_s={self.decision_interval_s!r} is shorter than one IMU sample"
-            )
         for g in self.imu_grades:
             if g not in IMU_GRADES:
                 raise ValueError(f"imu_grades: unknown grade {g!r}; known: {sorted(IMU_GRADES)}")
-        w = np.asarray(self.imu_grade_weights, dtype=float)
-        if w.shape != (len(self.imu_grades),) or np.any(w < 0) or w.sum() <= 0:
-            raise ValueError(f"imu_grade_weights invalid: {self.imu_grade_weights!r}")
-        if not (self.divergence_error_m > 0 and self.divergence_error_fraction >= 0):
-            raise ValueError("divergence_error_m must be > 0 and divergence_error_fraction ≥ 0")
-
-    @property
-    def interval_samples(self) -> int:
-        return int(round(self.decision_interval_s * self.rate_hz))
+        require_weights("imu_grade_weights", self.imu_grade_weights, len(self.imu_grades))
 
     @property
     def action_dim(self) -> int:
@@ -206,12 +197,7 @@ class FootZuptCore:
         self.obs = np.zeros((n, len(OBS_FEATURES) + config.action_dim), dtype=np.float32)
         self.last_error = np.zeros(n)
         self.lanes = np.arange(n)
-        self.obs_low = np.array(
-            [lo for _, lo, _ in OBS_FEATURES] + [-1.0] * config.action_dim, dtype=np.float32
-        )
-        self.obs_high = np.array(
-            [hi for _, _, hi in OBS_FEATURES] + [1.0] * config.action_dim, dtype=np.float32
-        )
+        self.obs_low, self.obs_high = obs_bounds(OBS_FEATURES, config.action_dim)
 
     # ------------------------------------------------------------------ reset
     def load_lane(
@@ -265,19 +251,13 @@ class FootZuptCore:
 
     # ------------------------------------------------------------------ action
     def validate_action(self, action: Any) -> Array:
-        """Shape ``(N, k)`` and finiteness check; returns float64."""
-        a = np.asarray(action, dtype=np.float64)
-        want = (self.n, self.config.action_dim)
-        if a.shape != want:
-            raise ValueError(f"{self.env_name}: actions must have shape {want}, got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"{self.env_name}: action contains NaN or inf: {a.tolist()}")
-        return a
+        """Shape ``(N, k)``, numeric and finite (:func:`spec.validate_action`); float64."""
+        return validate_action(action, (self.n, self.config.action_dim), self.env_name)
 
     def _apply_action(self, lanes: NDArray[np.integer]) -> None:
         a = self.action[lanes]
         e = self.engine
-        values = [base * span ** a[:, i] for i, (_, base, span, _) in enumerate(ACTION_KNOBS)]
+        values = [knob.value(a[:, i]) for i, knob in enumerate(ACTION_KNOBS)]
         e.omega_max[lanes], e.delta_f_max[lanes] = values[0], values[1]
         e.process_noise_scale[lanes], e.zupt_noise_scale[lanes] = values[2], values[3]
         if self.config.tune_min_stance:

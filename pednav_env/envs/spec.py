@@ -74,6 +74,13 @@ class Knob:
             return self.base + self.span * a
         return self.base + self.span * np.maximum(a, 0.0)
 
+    def action(self, value: Any) -> Any:
+        """The action component(s) giving physical ``value`` (log knobs:
+        ``log(value / base) / log(span)``, the inverse of :meth:`value`)."""
+        if self.mapping != "log":
+            raise ValueError(f"Knob {self.name!r}: action() is defined for log knobs only")
+        return np.log(value / self.base) / np.log(self.span)
+
 
 @dataclass(frozen=True)
 class ObsFeature:
