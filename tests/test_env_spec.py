@@ -85,3 +85,10 @@ def test_env_config_base_refuses_bad_common_settings_naming_them(field, value):
     assert _Config().interval_samples == 50
     with pytest.raises(ValueError, match=field):
         _Config(**{field: value})
+
+
+def test_knob_action_inverts_a_log_knob_and_is_refused_for_linear_ones():
+    omega = Knob("omega_max", "log", 0.22, 10.0, "rad/s")
+    np.testing.assert_allclose(omega.action(np.array([0.022, 0.22, 2.2])), [-1.0, 0.0, 1.0])
+    with pytest.raises(ValueError, match="log knobs only"):
+        Knob("step_threshold", "linear", 0.0, 3.0, "m/s²").action(1.0)
