@@ -20,7 +20,12 @@ The JSON object is described in docs/CONTRACTS.md ("pednav evaluate")::
     {"env": "pednav/FootZupt-v0", "episodes": 100, "seed": 5000,
      "policies": [{"name": "paper", "mean_error": .., "ci95": [lo, hi],
                    "final_error_pct": .., "divergence_rate": ..,
-                   "vs_paper": {"mean_diff": .., "p_value": ..}}, ...]}
+                   "vs_paper": {"mean_diff": .., "p_value": ..},
+                   "mean_error_non_diverged": .., "episode_errors": [.., ..],
+                   "vs_tuned": {"mean_diff": .., "p_value": ..}}, ...]}
+
+The tuned constant (``tuned``) is played whether named or not when one is shipped
+for the env, as the paper policy is, for ``vs_tuned``.
 """
 
 from __future__ import annotations
@@ -40,7 +45,7 @@ from stable_baselines3.common.evaluation import evaluate_policy
 
 import pednav_env  # noqa: F401  (registers the environments)
 from agents.policies import BUILTIN_POLICIES, load_policy
-from baselines import PaperPolicy
+from baselines import PaperPolicy, TunedFixedPolicy
 from pednav_env.sb3 import NativeVecEnv
 from pednav_env.seeds import check_evaluation_seeds
 
@@ -193,9 +198,31 @@ def run_episodes(
     return out
 
 
-def summarize(name: str, res: list[EpisodeResult], paper: list[EpisodeResult]) -> dict[str, Any]:
-    """Mean, 95 % CI (Student t), final error %, divergence rate, paired test vs paper."""
+def paired_test(err: np.ndarray, base: np.ndarray) -> dict[str, float]:
+    """Mean difference ``err − base`` over paired episodes and the paired t-test's
+    two-sided p-value (1 when nothing differs or there is one episode, 0 when
+    every pair differs by the same amount)."""
+    diff = err - base
+    if len(diff) < 2 or not np.any(diff != 0):
+        p = 1.0
+    elif np.all(diff == diff[0]):
+        p = 0.0  # every pair differs by the same amount: t is infinite
+    else:
+        p = float(stats.ttest_rel(err, base).pvalue)
+    return {"mean_diff": float(diff.mean()), "p_value": p}
+
+
+def summarize(
+    name: str,
+    res: list[EpisodeResult],
+    paper: list[EpisodeResult],
+    tuned: list[EpisodeResult] | None = None,
+) -> dict[str, Any]:
+    """Mean, 95 % CI (Student t), final error %, divergence rate, the mean over the
+    episodes that did not diverge, the per-episode errors (seed order) and paired
+    tests against the paper policy and (when played) the tuned constant."""
     err = np.array([r.mean_error for r in res])
+    diverged = np.array([r.diverged for r in res])
     n = len(err)
     mean = float(err.mean())
     if n > 1:
@@ -203,24 +230,25 @@ def summarize(name: str, res: list[EpisodeResult], paper: list[EpisodeResult]) -
     else:
         half = 0.0
     if name == "paper":
-        vs = {"mean_diff": 0.0, "p_value": None}
+        vs_paper: dict[str, Any] = {"mean_diff": 0.0, "p_value": None}
     else:
-        base = np.array([r.mean_error for r in paper])
-        diff = err - base
-        if n < 2 or not np.any(diff != 0):
-            p = 1.0
-        elif np.all(diff == diff[0]):
-            p = 0.0  # every pair differs by the same amount: t is infinite
-        else:
-            p = float(stats.ttest_rel(err, base).pvalue)
-        vs = {"mean_diff": float(diff.mean()), "p_value": p}
+        vs_paper = paired_test(err, np.array([r.mean_error for r in paper]))
+    if tuned is None:
+        vs_tuned: dict[str, Any] | None = None
+    elif name == "tuned":
+        vs_tuned = {"mean_diff": 0.0, "p_value": None}
+    else:
+        vs_tuned = paired_test(err, np.array([r.mean_error for r in tuned]))
     return {
         "name": name,
         "mean_error": mean,
         "ci95": [mean - half, mean + half],
         "final_error_pct": float(np.nanmean([r.final_error_pct for r in res])),
-        "divergence_rate": float(np.mean([r.diverged for r in res])),
-        "vs_paper": vs,
+        "divergence_rate": float(diverged.mean()),
+        "vs_paper": vs_paper,
+        "mean_error_non_diverged": float(err[~diverged].mean()) if (~diverged).any() else None,
+        "episode_errors": err.tolist(),
+        "vs_tuned": vs_tuned,
     }
 
 
@@ -265,6 +293,11 @@ def evaluate(
     policies = {name: load_policy(name, action_space, env_id) for name in policy_names}
     if "paper" not in policies:
         policies = {"paper": PaperPolicy(action_space), **policies}
+    if "tuned" not in policies:
+        try:  # the comparison every tuner must win, when a constant is shipped
+            policies["tuned"] = TunedFixedPolicy.for_env(env_id, action_space)
+        except ValueError:
+            pass
     plan = [
         (name, batch)
         for name, pol in policies.items()
@@ -290,5 +323,8 @@ def evaluate(
         "env": env_id,
         "episodes": episodes,
         "seed": seed,
-        "policies": [summarize(name, outcomes[name], outcomes["paper"]) for name in policy_names],
+        "policies": [
+            summarize(name, outcomes[name], outcomes["paper"], outcomes.get("tuned"))
+            for name in policy_names
+        ],
     }

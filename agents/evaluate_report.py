@@ -57,6 +57,7 @@ def format_table(result: dict[str, Any]) -> str:
         (f"{'policy':<{NAME_WIDTH}}", None),
         (f"{'mean error (m)':>14}", None),
         (f"{'95 % CI':>18}", None),
+        (f"{'not diverged (m)':>16}", None),
         (f"{'final % dist':>12}", "pct"),
         (f"{'diverged':>8}", None),
         (f"{'Δ vs paper':>10}", None),
@@ -73,11 +74,13 @@ def format_table(result: dict[str, Any]) -> str:
     for p in result["policies"]:
         lo, hi = p["ci95"]
         pv = p["vs_paper"]["p_value"]
+        nd = p.get("mean_error_non_diverged")
         diff = "—" if p["name"] == "paper" else f"{p['vs_paper']['mean_diff']:+.3f}"
         row = [
             f"{short_name(p['name']):<{NAME_WIDTH}}",
             f"{p['mean_error']:>14.3f}",
             f"{f'[{lo:.3f}, {hi:.3f}]':>18}",
+            f"{'—' if nd is None else f'{nd:.3f}':>16}",
         ]
         if show_pct:
             row.append(f"{p['final_error_pct']:>12.1f}")

@@ -73,6 +73,9 @@ def test_evaluate_json_has_the_contract_keys_and_paired_stats(tmp_path):
             "final_error_pct",
             "divergence_rate",
             "vs_paper",
+            "mean_error_non_diverged",
+            "episode_errors",
+            "vs_tuned",
         }
         lo, hi = p["ci95"]
         assert lo <= p["mean_error"] <= hi
@@ -83,6 +86,71 @@ def test_evaluate_json_has_the_contract_keys_and_paired_stats(tmp_path):
         learned["mean_error"] - paper["mean_error"], abs=1e-9
     )
     assert 0.0 <= learned["vs_paper"]["p_value"] <= 1.0
+
+
+def test_evaluate_scores_against_separate_scalar_episodes():
+    """episode_errors in seed order (episode i = a scalar env reset with seed S+i),
+    and the summary fields recomputed from those episodes and their end flags
+    with numpy / scipy. A 4 m divergence bound (no distance term) makes some
+    episodes diverge and others not."""
+    from dataclasses import replace
+
+    from scipy import stats
+
+    from baselines import InnovationAdaptivePolicy, TunedFixedPolicy
+
+    config = replace(SHORT["config"], divergence_error_m=4.0, divergence_error_fraction=0.0)
+    seed, n = 5100, 4
+    out = evaluate(ENV_ID, ["paper", "adaptive"], n, seed, {"config": config})
+    space = gym.make(ENV_ID).action_space
+    policies = {
+        "paper": PaperPolicy(space),
+        "adaptive": InnovationAdaptivePolicy(space, ENV_ID),
+        "tuned": TunedFixedPolicy.for_env(ENV_ID, space),
+    }
+    errors, diverged = {}, {}
+    for name, pol in policies.items():
+        env = gym.make(ENV_ID, config=config)
+        errors[name], diverged[name] = [], []
+        for i in range(n):
+            obs, _ = env.reset(seed=seed + i)
+            total = 0.0
+            while True:
+                obs, r, term, trunc, _ = env.step(pol.predict(obs)[0])
+                total += r
+                if term or trunc:
+                    break
+            errors[name].append(-total)
+            diverged[name].append(term)
+    flags = np.array([diverged[k] for k in ("paper", "adaptive")])
+    assert flags.any() and not flags.all(), "the bound should split the episodes"
+    by_name = {p["name"]: p for p in out["policies"]}
+    assert list(by_name) == ["paper", "adaptive"]  # tuned is played, not listed
+    for name, p in by_name.items():
+        err, div = np.array(errors[name]), np.array(diverged[name])
+        # the vector env's rewards reach SB3 as float32: relative 1e-6
+        np.testing.assert_allclose(p["episode_errors"], err, rtol=1e-6)
+        assert p["mean_error"] == pytest.approx(err.mean(), rel=1e-6)
+        assert p["divergence_rate"] == div.mean()
+        if div.all():
+            assert p["mean_error_non_diverged"] is None
+        else:
+            assert p["mean_error_non_diverged"] == pytest.approx(err[~div].mean(), rel=1e-6)
+        tuned = np.array(errors["tuned"])
+        assert p["vs_tuned"]["mean_diff"] == pytest.approx((err - tuned).mean(), abs=1e-5)
+        # the p-value of the same differences; abs 1e-4: float32 rewards move t slightly
+        want = stats.ttest_rel(err, tuned).pvalue if np.any(err != tuned) else 1.0
+        assert p["vs_tuned"]["p_value"] == pytest.approx(want, abs=1e-4)
+
+
+def test_vs_tuned_is_null_without_a_tuned_constant():
+    config = FootZuptConfig(
+        route=RouteRandomization(duration_s=(10.0, 12.0)), tune_min_stance=True
+    )  # five knobs: the shipped constant has four
+    out = evaluate(ENV_ID, ["paper"], 2, 5000, {"config": config})
+    assert out["policies"][0]["vs_tuned"] is None
+    out = evaluate(ENV_ID, ["tuned"], 2, 5000, SHORT)
+    assert out["policies"][0]["vs_tuned"] == {"mean_diff": 0.0, "p_value": None}
 
 
 def test_cli_evaluate_and_errors(capsys, tmp_path):
