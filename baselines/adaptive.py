@@ -104,7 +104,7 @@ class InnovationAdaptivePolicy:
         return a
 
     def _waist(self, obs: np.ndarray) -> np.ndarray:
-        from pednav_env.envs import waist_core as wc
+        from pednav_env.envs import waist_config as wc
 
         idx = {name: i for i, (name, _, _) in enumerate(wc.OBS_FEATURES)}
         k = len(wc.OBS_FEATURES)

@@ -234,9 +234,9 @@ def test_adaptive_rule_reacts_to_innovations_and_motion():
 def test_adaptive_rules_of_the_other_envs_follow_the_nis(env_id, feature, knob):
     """Too-large innovations raise the adapted noise scale, too-small ones lower it,
     and no update leaves it alone; all other knobs stay at the paper's values."""
-    from pednav_env.envs import marker_core, waist_core
+    from pednav_env.envs import marker_core, waist_config
 
-    core = waist_core if "Waist" in env_id else marker_core
+    core = waist_config if "Waist" in env_id else marker_core
     names = [f.name if hasattr(f, "name") else f[0] for f in core.OBS_FEATURES]
     space = gym.make(env_id).action_space
     obs = np.zeros((3, len(names) + space.shape[0]), np.float32)

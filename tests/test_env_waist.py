@@ -12,16 +12,14 @@ from env_rollout import rollout
 
 import pednav_env  # noqa: F401  (registers the environments)
 from pednav_env.envs import waist_step
-from pednav_env.envs.waist_core import (
-    WaistRandomization,
-    WaistStepConfig,
-    generate_episode,
+from pednav_env.envs.waist_config import WaistRandomization, WaistStepConfig
+from pednav_env.envs.waist_episode import generate_episode
+from pednav_env.nav.step_fusion_kf import StepFusionKF
+from pednav_env.nav.step_velocity import (
+    biomechanical_step_velocity,
     pendulum_step_velocity,
     prefix_integrals,
 )
-from pednav_env.nav.step_fusion_kf import StepFusionKF
-from pednav_env.nav.waist_dr import biomechanical_step_velocity
-from pednav_env.sensors.ins_error import CHANNEL_SIGN, schuler_transition
 from pednav_env.testing.reference_waist import FilterpyWaistReference
 
 ENV_ID = "pednav/WaistStep-v0"
@@ -103,9 +101,10 @@ def test_divergence_terminates_and_holds_the_final_error():
     assert k < 60
 
 
-def test_filter_update_equals_engine_step_bit_for_bit():
-    """The core updates a subset of lanes with the engine's functions; the result
-    equals :meth:`StepFusionKF.step` with a mask on all lanes, bit for bit."""
+def test_filter_update_of_some_lanes_equals_masked_step_bit_for_bit():
+    """The core updates a subset of lanes (:meth:`StepFusionKF.step_sequence`, its
+    knobs as the filter's Q and R scales); the result equals the step with a mask
+    on all lanes, bit for bit."""
     env = gym.make_vec(ENV_ID, num_envs=6, vectorization_mode="vector_entry_point", config=SHORT)
     env.reset(seed=7)
     rng = np.random.default_rng(5)
@@ -120,11 +119,7 @@ def test_filter_update_equals_engine_step_bit_for_bit():
     v_ins, vb = rng.normal(1, 0.5, (6, 2)), rng.normal(1, 0.5, (6, 2))
     T = rng.uniform(0.02, 3.0, 6)
     ref.step(v_ins, vb, T, mask)
-    c = kf.config
-    F = schuler_transition(T[sel, None], c.g, c.earth_radius, CHANNEL_SIGN[None, :])
-    Q = c.Q * core.knobs[sel, 4][:, None, None, None]
-    R = c.R * (core.knobs[sel, 3] ** 2)[:, None, None, None]
-    core._filter_update(sel, v_ins[sel], vb[sel], T[sel], F, Q, R)
+    kf.step_sequence(sel, v_ins[sel], vb[sel], T[sel])
     np.testing.assert_array_equal(kf.x[sel], ref.x[sel])
     np.testing.assert_array_equal(kf.P[sel], ref.P[sel])
     np.testing.assert_array_equal(kf.pos[sel], ref.pos[sel])
@@ -135,7 +130,7 @@ def test_filter_update_equals_engine_step_bit_for_bit():
 def test_prefix_step_velocity_equals_library_function():
     ep = generate_episode(SHORT, np.random.default_rng(3))
     dt = 1.0 / SHORT.rate_hz
-    c1, c2 = prefix_integrals(ep.a_up, dt)
+    c1, c2 = prefix_integrals(ep.a_up, dt, "delta_v")
     rng = np.random.default_rng(0)
     j0 = rng.integers(0, ep.a_up.size - 400, 50)
     n = rng.integers(1, 300, 50)

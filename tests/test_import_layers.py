@@ -30,11 +30,7 @@ MAY_IMPORT = {
 }
 #: Violations on main today: (importer, imported module or private name). Each entry
 #: goes once the code is back in its layer (the test fails on a stale entry).
-KNOWN = {
-    ("pednav_env.envs.waist_core", "pednav_env.reproduce.paper004"),  # paper 004's route
-    ("pednav_env.envs.waist_core", "pednav_env.nav.waist_dr._prefix_integrals"),  # private
-    ("pednav_env.gait.robot", "pednav_env.sensors.imu"),  # gait imports a sensor model
-}
+KNOWN: set[tuple[str, str]] = set()
 
 
 def unit(name: str) -> str | None:

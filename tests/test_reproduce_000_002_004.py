@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from pednav_env import reproduce
+from pednav_env.gait.waist_walk import route_azimuths
 from pednav_env.nav.step_fusion_kf import StepFusionConfig, StepFusionKF
 from pednav_env.reproduce import paper002, paper004
 from pednav_env.sensors.ins_error import schuler_transition
@@ -141,7 +142,7 @@ def test_paper004_shortcut_equals_engine() -> None:
     x = np.moveaxis(x0, 2, 0).copy()  # (M, 2, 3)
     Phi = schuler_transition(np.full((1, 2), 0.5), cfg.g, cfg.earth_radius)
     kf = StepFusionKF(cfg, M)
-    az = paper004.route_azimuths(K)
+    az = route_azimuths(K)
     E = np.zeros((M, 2))
     for k in range(K):
         wa, we, n = rng.standard_normal((1, 3, 2, M))[0]

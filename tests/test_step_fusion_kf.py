@@ -297,3 +297,42 @@ def test_invalid_step_inputs_raise() -> None:
     kf.q_scale = 1.0
     kf.step(np.array([[np.nan, 0], [0, 0]]), ok, np.array([-1.0, 0.5]), np.array([False, True]))
     assert kf.steps.tolist() == [0, 1]
+
+
+def test_step_sequence_equals_masked_steps_bit_for_bit() -> None:
+    # A sequence of steps (several per walker, some walkers none) must give exactly
+    # the numbers of one masked step per round, and leave step-less walkers untouched.
+    rng = np.random.default_rng(17)
+    cfg = StepFusionConfig(accel_noise_std=0.3)
+    n = 5
+    q, r = rng.uniform(0.5, 2.0, n), rng.uniform(0.5, 2.0, n)
+    masked = StepFusionKF(cfg, n, q_scale=q, r_scale=r)
+    seq = StepFusionKF(cfg, n, q_scale=q, r_scale=r)
+    for _ in range(10):
+        counts = rng.integers(0, 4, n)  # steps per walker in this call
+        walker = np.repeat(np.arange(n), counts)
+        vi, vb = rng.normal(size=(walker.size, 2)), rng.normal(size=(walker.size, 2))
+        T = rng.uniform(0.3, 0.8, walker.size)
+        first = np.cumsum(counts) - counts
+        y_want, S_want = np.full((walker.size, 2), np.nan), np.full((walker.size, 2), np.nan)
+        for j in range(counts.max()):
+            m = counts > j
+            e = first[m] + j
+            vi_j, vb_j, T_j = np.zeros((n, 2)), np.zeros((n, 2)), np.ones(n)
+            vi_j[m], vb_j[m], T_j[m] = vi[e], vb[e], T[e]
+            masked.step(vi_j, vb_j, T_j, m)
+            y_want[e], S_want[e] = masked.y[m], masked.S[m]
+        y, S = seq.step_sequence(walker, vi, vb, T)
+        np.testing.assert_array_equal(y, y_want)
+        np.testing.assert_array_equal(S, S_want)
+    for name in ("x", "P", "pos", "x_prior", "P_prior", "y", "S", "K", "repairs", "steps"):
+        np.testing.assert_array_equal(getattr(seq, name), getattr(masked, name))
+    ok = np.zeros((2, 2))
+    bad = (([1, 0], "non-decreasing"), ([0, 5], r"\[0, 5\)"), ([0.0, 1.0], "integer"))
+    for walker, match in bad:
+        with pytest.raises(ValueError, match=match):
+            seq.step_sequence(np.array(walker), ok, ok, np.full(2, 0.5))
+    with pytest.raises(ValueError, match=r"\(2, 2\)"):
+        seq.step_sequence(np.array([0, 1]), np.zeros((n, 2)), np.zeros((n, 2)), np.full(n, 0.5))
+    with pytest.raises(ValueError, match="step_period"):
+        seq.step_sequence(np.array([0, 1]), ok, ok, np.array([0.5, 0.0]))

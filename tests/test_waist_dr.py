@@ -9,19 +9,21 @@ import pytest
 
 from pednav_env.gait.pendulum import PendulumSteps, simulate_walk, step_kinematics
 from pednav_env.gait.robot import RobotConfig, simulate_robot
+from pednav_env.nav.step_velocity import (
+    biomechanical_step_velocity,
+    nested_trapezoid_mean_velocity,
+)
 from pednav_env.nav.waist_dr import (
     StepDetectorConfig,
     StepDetectorState,
-    biomechanical_step_velocity,
     boundaries_to_steps,
     detect_steps,
     euler_dead_reckoning,
     euler_rates_from_body,
     euler_rates_transpose_hypothesis,
-    nested_trapezoid_mean_velocity,
 )
 from pednav_env.rotations import body_rates_from_euler
-from pednav_env.sensors.imu import ideal_specific_force
+from pednav_env.sensors.imu import ideal_imu, ideal_specific_force
 
 G = 9.80665
 
@@ -72,7 +74,7 @@ def test_one_sample_yaw_offset_explains_no_oscillation_miss() -> None:
     cfg = RobotConfig.no_oscillation()
     dt = 0.025
     walk = simulate_robot(cfg, dt, align_to_grid=True)
-    omega, f = walk.ideal_imu(G)
+    omega, f = ideal_imu(walk.euler, walk.euler_rate, walk.acc_n_mean, G)
     dr = euler_dead_reckoning(omega, f, dt, walk.euler[:, 0], walk.vel_n[:, 0], walk.pos_n[:, 0], G)
     V, delta = cfg.speed, 0.5 * math.pi * dt
     rot = np.array([[math.cos(delta), -math.sin(delta)], [math.sin(delta), math.cos(delta)]])
@@ -105,7 +107,7 @@ def test_roll_error_scales_with_sample_period() -> None:
     misses = []
     for dt in (0.025, 0.0125):
         walk = simulate_robot(cfg, dt)
-        omega, f = walk.ideal_imu(G)
+        omega, f = ideal_imu(walk.euler, walk.euler_rate, walk.acc_n_mean, G)
         dr = euler_dead_reckoning(
             omega, f, dt, walk.euler[:, 0], walk.vel_n[:, 0], walk.pos_n[:, 0], G
         )

@@ -17,7 +17,7 @@ from functools import partial
 from typing import Any
 
 from agents.bench.timing import DEFAULT_SIZES, bench_native_vs_reference
-from pednav_env.envs.waist_core import WaistStepConfig
+from pednav_env.envs.waist_config import WaistStepConfig
 from pednav_env.envs.waist_step import WaistStepVectorEnv
 from pednav_env.testing.reference_waist import FilterpyWaistReference
 

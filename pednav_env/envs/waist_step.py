@@ -7,14 +7,9 @@ from typing import Any
 import numpy as np
 
 from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
-from pednav_env.envs.waist_core import (
-    ACTION_DIM,
-    ACTION_KNOBS,
-    OBS_FEATURES,
-    WAIST_GRADES,
-    WaistStepConfig,
-    WaistStepCore,
-)
+from pednav_env.envs.waist_config import ACTION_DIM, ACTION_KNOBS, OBS_FEATURES, WaistStepConfig
+from pednav_env.envs.waist_core import WaistStepCore
+from pednav_env.sensors.waist_grades import WAIST_GRADES
 
 ENV_ID = "pednav/WaistStep-v0"
 
@@ -34,7 +29,7 @@ class WaistStepEnv(NativeScalarEnv):
     configuration, so the zero policy is the paper baseline.
 
     Episodes are drawn from the reset seed (domain randomisation,
-    :class:`pednav_env.envs.waist_core.WaistRandomization`): a walk of 60–180 s
+    :class:`pednav_env.envs.waist_config.WaistRandomization`): a walk of 60–180 s
     after a 0.5–2 s stand; leg length 0.75–1 m (the filter's assumed leg
     length off by ~2 %); bouts of 8–50 steps in slow / normal / fast gait
     (step period 0.42–0.8 s, step length 0.55–1.05 leg lengths, 3 % jitter
@@ -118,7 +113,7 @@ class WaistStepEnv(NativeScalarEnv):
     ## Arguments
     ``gymnasium.make("pednav/WaistStep-v0", scenario="random", decision_interval_s=0.5,
     rate_hz=100.0, paper_steps=10128, config=None, render_mode=None)``;
-    ``config`` is a full :class:`pednav_env.envs.waist_core.WaistStepConfig`
+    ``config`` is a full :class:`pednav_env.envs.waist_config.WaistStepConfig`
     (walk duration range, randomisation, grades, filter, divergence bound).
 
     ## Vectorized environment

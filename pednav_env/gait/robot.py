@@ -34,6 +34,10 @@ frame; the oscillations run on the global clock t during stops as written
 (``oscillate_when_stopped=True``) or freeze while the robot stands
 (``False``: a gait clock τ that only advances while walking); forward and
 lateral speeds are zero while turning and after the end.
+
+The robot's ideal IMU readings (eqs 9, 10, 12) are
+:func:`pednav_env.sensors.imu.ideal_imu` of its Euler angles, rates and
+``acc_n_mean``.
 """
 
 from __future__ import annotations
@@ -44,10 +48,6 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import NDArray
-
-from pednav_env.constants import STANDARD_GRAVITY
-from pednav_env.rotations import body_rates_from_euler
-from pednav_env.sensors.imu import ideal_specific_force
 
 Array = NDArray[np.float64]
 
@@ -257,15 +257,6 @@ class RobotWalk:
     route_end: Array
     end_index: NDArray[np.int64]
     dt: float
-
-    def ideal_imu(self, g: float = STANDARD_GRAVITY) -> tuple[Array, Array]:
-        """Ideal body rate (eq 9) and specific force (eqs 10, 12), each (N, T, 3).
-
-        ω_b = body rates of the true Euler angles and rates; f_b = C_nbᵀ (a + g e_up)
-        with a the finite-difference acceleration of eq (10).
-        """
-        omega_b = body_rates_from_euler(self.euler, self.euler_rate)
-        return omega_b, ideal_specific_force(self.acc_n_mean, self.euler, g)
 
 
 def _arrays(configs: Sequence[RobotConfig], name: str) -> Array:

@@ -16,7 +16,9 @@ corrected velocity uses the *extrapolated* estimate and integrates position::
 
 Engine layout: walkers on the leading axis N, then the channel axis
 (0 = east [δV_E, β_N, ε_N], 1 = north [δV_N, β_E, ε_E]); x ``(N, 2, 3)``,
-P ``(N, 2, 3, 3)``. The stateless functions :func:`kf_predict`,
+P ``(N, 2, 3, 3)``. :meth:`StepFusionKF.step` takes one step of the walkers
+in a mask; :meth:`StepFusionKF.step_sequence` a batch of steps of some
+walkers, computing only their rows. The stateless functions :func:`kf_predict`,
 :func:`kf_gain`, :func:`joseph_update` and :func:`kf_update` broadcast over
 any leading axes (a shared covariance ``(…, 1, 3, 3)`` serves many state
 vectors ``(…, M, 3)`` — the Monte Carlo of paper 004 uses that). The update is
@@ -30,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -204,7 +207,8 @@ class StepFusionKF:
     n_walkers : int
     q_scale, r_scale : float or (N,)
         Per-walker multipliers of Q and R (an agent's action later); settable
-        attributes, validated on every step (finite, > 0).
+        attributes (stored as read-only (N,) copies), validated at the next
+        step (finite, > 0).
 
     Attributes
     ----------
@@ -230,6 +234,7 @@ class StepFusionKF:
             raise ValueError(f"n_walkers must be a positive integer, got {n_walkers!r}")
         self.config = config
         self.n = int(n_walkers)
+        self._Q, self._R = config.Q, config.R
         self.q_scale = q_scale
         self.r_scale = r_scale
         self.reset(pos0)
@@ -252,14 +257,43 @@ class StepFusionKF:
         self.steps = np.zeros(n, dtype=np.int64)
         self.diverged = np.zeros(n, dtype=bool)
 
+    @property
+    def q_scale(self) -> Array:
+        """Per-walker multiplier of Q, (N,)."""
+        return self._q_scale
+
+    @q_scale.setter
+    def q_scale(self, value: ArrayLike) -> None:
+        self._q_scale = self._per_walker("q_scale", value)
+
+    @property
+    def r_scale(self) -> Array:
+        """Per-walker multiplier of R, (N,)."""
+        return self._r_scale
+
+    @r_scale.setter
+    def r_scale(self, value: ArrayLike) -> None:
+        self._r_scale = self._per_walker("r_scale", value)
+
+    def _per_walker(self, name: str, value: ArrayLike) -> Array:
+        try:
+            v = np.array(value, dtype=float)
+            if v.shape != (self.n,):
+                v = np.array(np.broadcast_to(v, (self.n,)))
+        except ValueError:
+            raise ValueError(f"StepFusionKF.{name} must be a number or ({self.n},)") from None
+        v.flags.writeable = False
+        self._scales_checked = False
+        return v
+
     def _scales(self) -> tuple[Array, Array]:
-        out = []
-        for name in ("q_scale", "r_scale"):
-            v = np.broadcast_to(np.asarray(getattr(self, name), dtype=float), (self.n,))
-            if not np.all(np.isfinite(v)) or np.any(v <= 0):
-                raise ValueError(f"StepFusionKF.{name} must be finite and > 0, got {v!r}")
-            out.append(v)
-        return out[0], out[1]
+        """Q and R scales, checked (finite, > 0) once after each assignment."""
+        if not self._scales_checked:
+            for name, v in (("q_scale", self._q_scale), ("r_scale", self._r_scale)):
+                if not (v.min() > 0 and v.max() < np.inf):  # NaN fails both
+                    raise ValueError(f"StepFusionKF.{name} must be finite and > 0, got {v!r}")
+            self._scales_checked = True
+        return self._q_scale, self._r_scale
 
     def step(
         self,
@@ -287,40 +321,147 @@ class StepFusionKF:
             Corrected step velocity (eq 5); for masked-out walkers V̄^INS.
         """
         n = self.n
+        m = np.ones(n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        if m.shape != (n,):
+            raise ValueError(f"mask must be ({n},), got {m.shape}")
+        vi, vb, T = self._inputs(vbar_ins, vbar_bm, step_period, n, m)
+        qs, rs = self._scales()
+        Tm = np.where(m, T, 1.0)
+        F, Q, R = self._model(Tm, qs, rs)
+        u = self._update(self.x, self.P, vi, vb, F, Q, R)
+        sel = m[:, None]
+        self.x = np.where(sel[..., None], u.x, self.x)
+        self.P = np.where(sel[..., None, None], u.P, self.P)
+        self.x_prior = np.where(sel[..., None], u.x_prior, self.x_prior)
+        self.P_prior = np.where(sel[..., None, None], u.P_prior, self.P_prior)
+        self.y = np.where(sel, u.y, self.y)
+        self.S = np.where(sel, u.S, self.S)
+        self.K = np.where(sel[..., None], u.K, self.K)
+        self.pos = np.where(sel, self.pos + Tm[:, None] * u.vbar_corr, self.pos)  # eq (6)
+        self.repairs += (m & u.repaired).astype(np.int64)
+        self.steps += m.astype(np.int64)
+        self.diverged |= m & ~u.ok
+        return np.where(sel, u.vbar_corr, vi)
+
+    def step_sequence(
+        self,
+        walker: ArrayLike,
+        vbar_ins: ArrayLike,
+        vbar_bm: ArrayLike,
+        step_period: ArrayLike,
+    ) -> tuple[Array, Array]:
+        """Process E steps of some walkers, each walker's steps in order (eqs 3–6).
+
+        Round j updates the j-th step of every walker that has one, on those
+        walkers' rows only; walkers without a step are left untouched. Every
+        walker's numbers equal those of :meth:`step` called once per step with
+        a mask, bit for bit (tested), without the masked work on the others.
+
+        Parameters
+        ----------
+        walker : (E,) int
+            Walker of each step, non-decreasing: steps grouped by walker, each
+            walker's in time order (the order ``np.nonzero`` gives for an
+            (N, T) array of step ends).
+        vbar_ins, vbar_bm : (E, 2) m/s
+            As in :meth:`step`, one row per step.
+        step_period : (E,) s
+            T_k, > 0.
+
+        Returns
+        -------
+        y, S : (E, 2)
+            Each step's innovation (eq 3 minus the prediction) and its variance.
+        """
+        n = self.n
+        w = np.asarray(walker)
+        if w.ndim != 1 or w.dtype.kind not in "iu":
+            raise ValueError(f"walker must be a 1-D integer array, got {w.dtype} {w.shape}")
+        if w.size and (w[0] < 0 or w[-1] >= n or np.any(w[1:] < w[:-1])):
+            raise ValueError(f"walker must be non-decreasing indices in [0, {n}), got {w.tolist()}")
+        vi, vb, T = self._inputs(vbar_ins, vbar_bm, step_period, w.size, None)
+        qs, rs = self._scales()
+        F, Q, R = self._model(T, qs[w], rs[w])
+        counts = np.bincount(w, minlength=n)
+        first = np.cumsum(counts) - counts  # each walker's first step
+        y_out = np.empty((w.size, 2))
+        S_out = np.empty((w.size, 2))
+        for j in range(int(counts.max(initial=0))):
+            rows = np.flatnonzero(counts > j)
+            e = first[rows] + j
+            u = self._update(self.x[rows], self.P[rows], vi[e], vb[e], F[e], Q[e], R[e])
+            self.x[rows], self.P[rows] = u.x, u.P
+            self.x_prior[rows], self.P_prior[rows] = u.x_prior, u.P_prior
+            self.y[rows], self.S[rows], self.K[rows] = u.y, u.S, u.K
+            self.pos[rows] = self.pos[rows] + T[e][:, None] * u.vbar_corr  # eq (6)
+            self.repairs[rows] += u.repaired
+            self.steps[rows] += 1
+            self.diverged[rows] |= ~u.ok
+            y_out[e], S_out[e] = u.y, u.S
+        return y_out, S_out
+
+    @staticmethod
+    def _inputs(
+        vbar_ins: ArrayLike,
+        vbar_bm: ArrayLike,
+        step_period: ArrayLike,
+        n: int,
+        m: NDArray[np.bool_] | None,
+    ) -> tuple[Array, Array, Array]:
+        """Shape and finiteness checks of n rows, of which ``m`` (default all) step."""
         vi = np.asarray(vbar_ins, dtype=float)
         vb = np.asarray(vbar_bm, dtype=float)
         if vi.shape != (n, 2) or vb.shape != (n, 2):
             raise ValueError(f"vbar_ins and vbar_bm must be ({n}, 2), got {vi.shape}, {vb.shape}")
         T = np.broadcast_to(np.asarray(step_period, dtype=float), (n,))
-        m = np.ones(n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
-        if m.shape != (n,):
-            raise ValueError(f"mask must be ({n},), got {m.shape}")
-        if not (np.all(np.isfinite(vi[m])) and np.all(np.isfinite(vb[m]))):
+        vi_m, vb_m, T_m = (vi, vb, T) if m is None else (vi[m], vb[m], T[m])
+        if not (np.isfinite(vi_m).all() and np.isfinite(vb_m).all()):
             raise ValueError("vbar_ins/vbar_bm contain NaN or inf for active walkers")
-        if not np.all(np.isfinite(T[m])) or np.any(T[m] <= 0):
-            raise ValueError(f"step_period must be finite and > 0, got {T[m]!r}")
-        qs, rs = self._scales()
+        if T_m.size and not (T_m.min() > 0 and T_m.max() < np.inf):  # NaN fails both
+            raise ValueError(f"step_period must be finite and > 0, got {T_m!r}")
+        return vi, vb, T
+
+    def _model(self, T: Array, qs: Array, rs: Array) -> tuple[Array, Array, Array]:
+        """Φ(T) per row and channel, Q × q_scale and R × r_scale per row."""
         c = self.config
-        Tm = np.where(m, T, 1.0)
-        F = schuler_transition(Tm[:, None], c.g, c.earth_radius, CHANNEL_SIGN[None, :])
-        Q = c.Q * qs[:, None, None, None]
-        R = c.R * rs[:, None, None, None]
-        x_prior, P_prior = kf_predict(self.x, self.P, F, Q)
+        F = schuler_transition(T[:, None], c.g, c.earth_radius, CHANNEL_SIGN[None, :])
+        return F, self._Q * qs[:, None, None, None], self._R * rs[:, None, None, None]
+
+    def _update(
+        self, x: Array, P: Array, vi: Array, vb: Array, F: Array, Q: Array, R: Array
+    ) -> _StepUpdate:
+        """Eqs (3)–(5) on the given rows: predict, update, repair P."""
+        c = self.config
+        x_prior, P_prior = kf_predict(x, P, F, Q)
         vbar_corr = vi - x_prior[..., 0]  # eq (5): V̄^INS − H Φ x̂(k−1)
         z = (vi - vb)[..., None]  # eq (3)
         x_post, P_post, y, S, K = kf_update(x_prior, P_prior, z, H_DV, R)
         P_post, repaired = repair_covariance(P_post, c.repair_tol, c.eig_floor)
         ok = np.all(np.isfinite(x_post), axis=(1, 2)) & np.all(np.isfinite(P_post), axis=(1, 2, 3))
-        sel = m[:, None]
-        self.x = np.where(sel[..., None], x_post, self.x)
-        self.P = np.where(sel[..., None, None], P_post, self.P)
-        self.x_prior = np.where(sel[..., None], x_prior, self.x_prior)
-        self.P_prior = np.where(sel[..., None, None], P_prior, self.P_prior)
-        self.y = np.where(sel, y[..., 0], self.y)
-        self.S = np.where(sel, S[..., 0, 0], self.S)
-        self.K = np.where(sel[..., None], K[..., 0], self.K)
-        self.pos = np.where(sel, self.pos + Tm[:, None] * vbar_corr, self.pos)  # eq (6)
-        self.repairs += (m & np.any(repaired, axis=1)).astype(np.int64)
-        self.steps += m.astype(np.int64)
-        self.diverged |= m & ~ok
-        return np.where(sel, vbar_corr, vi)
+        return _StepUpdate(
+            x=x_post,
+            P=P_post,
+            x_prior=x_prior,
+            P_prior=P_prior,
+            y=y[..., 0],
+            S=S[..., 0, 0],
+            K=K[..., 0],
+            vbar_corr=vbar_corr,
+            repaired=np.any(repaired, axis=1),
+            ok=ok,
+        )
+
+
+class _StepUpdate(NamedTuple):
+    """One update of M walkers' rows (both channels)."""
+
+    x: Array  #: (M, 2, 3) posterior
+    P: Array  #: (M, 2, 3, 3) posterior, symmetrised and repaired
+    x_prior: Array
+    P_prior: Array
+    y: Array  #: (M, 2) innovation
+    S: Array  #: (M, 2) its variance
+    K: Array  #: (M, 2, 3) gain
+    vbar_corr: Array  #: (M, 2) eq (5)
+    repaired: NDArray[np.bool_]  #: (M,) a channel's covariance was repaired
+    ok: NDArray[np.bool_]  #: (M,) finite state and covariance

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from pednav_env.gait.pendulum import PendulumSteps, step_kinematics
-from pednav_env.nav.waist_dr import biomechanical_step_velocity, nested_trapezoid_mean_velocity
+from pednav_env.nav.step_velocity import biomechanical_step_velocity, nested_trapezoid_mean_velocity
 from pednav_env.reproduce import ReproductionResult, ReproductionRow
 
 #: Paper 000's printed values.

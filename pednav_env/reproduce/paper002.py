@@ -32,6 +32,7 @@ from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.gait.robot import RobotConfig, RobotWalk, simulate_robot
 from pednav_env.nav.waist_dr import euler_dead_reckoning
 from pednav_env.reproduce import ReproductionResult, ReproductionRow
+from pednav_env.sensors.imu import ideal_imu
 
 #: Paper 002's published figures.
 PAPER = {
@@ -56,7 +57,7 @@ def _end_miss(walk: RobotWalk, pos_est: np.ndarray) -> np.ndarray:
 
 
 def _dead_reckon(walk: RobotWalk, method: str, g: float) -> np.ndarray:
-    omega_b, f_b = walk.ideal_imu(g)
+    omega_b, f_b = ideal_imu(walk.euler, walk.euler_rate, walk.acc_n_mean, g)
     e0, v0, p0 = walk.euler[:, 0], walk.vel_n[:, 0], walk.pos_n[:, 0]
     if method == "quaternion":
         from pednav_env.nav.strapdown import integrate

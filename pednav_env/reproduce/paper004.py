@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from pednav_env.constants import EARTH_RADIUS, STANDARD_GRAVITY
+from pednav_env.gait.waist_walk import PAPER_STEPS, route_azimuths
 from pednav_env.nav.step_fusion_kf import (
     H_DV,
     StepFusionConfig,
@@ -49,7 +50,6 @@ from pednav_env.reproduce import ReproductionResult, ReproductionRow
 from pednav_env.sensors.ins_error import CHANNEL_SIGN, schuler_transition
 
 PAPER_RUNS = 10_000
-PAPER_STEPS = 10_128
 SIGMA_A = (0.1, 0.5, 1.0)
 #: Steps k ≥ TRANSIENT enter the agreement metrics (after the initial transient).
 TRANSIENT = 30
@@ -66,13 +66,6 @@ class MonteCarloStats:
     distance: np.ndarray  #: (K+1,) distance walked, m
     runs: int
     repairs: int
-
-
-def route_azimuths(steps: int, legs: int = 6, first_deg: float = 30.0) -> np.ndarray:
-    """Azimuth α(k) (rad, from north, clockwise) of each step k = 1 … K: ``legs`` equal
-    legs turning by 360°/legs, starting at ``first_deg`` (paper 004: α = 30°)."""
-    leg = np.minimum(np.arange(steps) * legs // steps, legs - 1)
-    return np.radians(first_deg + leg * 360.0 / legs)
 
 
 def monte_carlo(

@@ -27,7 +27,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from pednav_env.constants import STANDARD_GRAVITY
-from pednav_env.rotations import euler_to_dcm
+from pednav_env.rotations import body_rates_from_euler, euler_to_dcm
 
 Array = NDArray[np.float64]
 
@@ -269,6 +269,22 @@ def ideal_specific_force(acc_n: Array, euler: Array, g: float = STANDARD_GRAVITY
     a_minus_g = np.asarray(acc_n, dtype=float).copy()
     a_minus_g[..., 2] += g
     return np.einsum("...ji,...j->...i", C_nb, a_minus_g)
+
+
+def ideal_imu(
+    euler: Array, euler_rate: Array, acc_n: Array, g: float = STANDARD_GRAVITY
+) -> tuple[Array, Array]:
+    """Ideal body rate and specific force of a sampled motion, each (..., 3).
+
+    ω_b = body rates of the true Euler angles and their rates (paper 002 eq 9,
+    :func:`pednav_env.rotations.body_rates_from_euler`); f_b =
+    :func:`ideal_specific_force` of the acceleration ``acc_n`` (paper 002
+    eq 12). For :class:`pednav_env.gait.robot.RobotWalk` and
+    :class:`pednav_env.gait.pendulum.PendulumWalk` pass ``acc_n_mean``, the
+    mean acceleration over each sample interval (paper 002 eq 10), which is
+    what an IMU's delta velocities measure.
+    """
+    return body_rates_from_euler(euler, euler_rate), ideal_specific_force(acc_n, euler, g)
 
 
 def _as_list(value, n: int, name: str) -> list:

@@ -5,7 +5,7 @@
 same episodes, streams its sensor samples one at a time through the engine's step
 detector (:func:`pednav_env.nav.waist_dr.detect_steps` with N = 1 and its carried
 state), and at each detected step computes V̄^INS, the pendulum step velocity with
-the library's :func:`~pednav_env.nav.waist_dr.biomechanical_step_velocity` on the
+the library's :func:`~pednav_env.nav.step_velocity.biomechanical_step_velocity` on the
 step's samples, and runs two ``KalmanFilter`` objects (east and north channel of
 paper 004) through ``predict(F=Φ(T), Q=Q)`` and ``update(S)``, with the position of
 eqs (5)–(6); at the end of each interval it forms the position estimate and its
@@ -20,14 +20,11 @@ import numpy as np
 from filterpy.kalman import KalmanFilter
 from gymnasium.utils import seeding
 
-from pednav_env.envs.waist_core import WaistStepConfig, generate_episode
+from pednav_env.envs.waist_config import WaistStepConfig
+from pednav_env.envs.waist_episode import generate_episode
 from pednav_env.nav.step_fusion_kf import H_DV
-from pednav_env.nav.waist_dr import (
-    StepDetectorConfig,
-    StepDetectorState,
-    biomechanical_step_velocity,
-    detect_steps,
-)
+from pednav_env.nav.step_velocity import biomechanical_step_velocity
+from pednav_env.nav.waist_dr import StepDetectorConfig, StepDetectorState, detect_steps
 from pednav_env.sensors.ins_error import CHANNEL_SIGN, schuler_transition
 
 
