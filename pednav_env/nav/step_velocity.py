@@ -17,20 +17,15 @@ the reading that reproduces paper 000's printed V̄ = 1.39994406 and
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from pednav_env.checks import require_positive
+
 Array = NDArray[np.float64]
-
-
-def _check_dt(dt: float) -> float:
-    if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
-    return float(dt)
 
 
 def prefix_integrals(
@@ -90,7 +85,8 @@ def nested_trapezoid_mean_velocity(
     -------
     vbar : (N, K) m/s
     """
-    dt = _check_dt(dt)
+    require_positive("dt", dt)
+    dt = float(dt)
     a = np.asarray(acc, dtype=float)
     e = np.asarray(step_edges, dtype=np.int64)
     c1, c2 = prefix_integrals(a, dt, "trapezoid")
@@ -154,7 +150,8 @@ def biomechanical_step_velocity(
     -------
     BiomechanicalVelocity
     """
-    dt = _check_dt(dt)
+    require_positive("dt", dt)
+    dt = float(dt)
     a = np.asarray(acc_up, dtype=float)
     if a.ndim != 2:
         raise ValueError(f"acc_up must be (N, T), got {a.shape}")

@@ -22,16 +22,11 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from pednav_env.checks import require_positive
 from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.rotations import euler_to_dcm
 
 Array = NDArray[np.float64]
-
-
-def _check_dt(dt: float) -> float:
-    if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
-    return float(dt)
 
 
 # --------------------------------------------------------------------------- paper 002
@@ -139,7 +134,8 @@ def euler_dead_reckoning(
     DeadReckoning
         Attitude, velocity and position at samples 0 … T−1.
     """
-    dt = _check_dt(dt)
+    require_positive("dt", dt)
+    dt = float(dt)
     w = np.asarray(omega_b, dtype=float)
     f = np.asarray(f_b, dtype=float)
     if w.ndim != 3 or w.shape[-1] != 3 or w.shape != f.shape:
@@ -260,7 +256,8 @@ def detect_steps(
         True at the samples where a step boundary is declared.
     state : StepDetectorState
     """
-    dt = _check_dt(dt)
+    require_positive("dt", dt)
+    dt = float(dt)
     f = np.asarray(f_b, dtype=float)
     if f.ndim != 3 or f.shape[-1] != 3:
         raise ValueError(f"f_b must be (N, T, 3), got {f.shape}")
