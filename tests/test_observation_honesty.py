@@ -24,7 +24,7 @@ import pednav_env  # noqa: F401  (registers the environments)
 from baselines import InnovationAdaptivePolicy
 from pednav_env.envs.foot_core import FootZuptConfig
 from pednav_env.envs.marker_config import MarkerTrackConfig
-from pednav_env.envs.waist_core import WaistRandomization, WaistStepConfig
+from pednav_env.envs.waist_config import WaistRandomization, WaistStepConfig
 from pednav_env.gait.foot_route import RouteRandomization
 
 ENV_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("pednav/"))
