@@ -9,6 +9,11 @@ navigation frame, scalar first, Hamilton product. Euler angles are paper
 
 With y pointing left, positive pitch θ turns the nose (toes) down, which is
 why paper 003's alignment reads f₁ = −g sin θ (its eq 4).
+
+:func:`wrap_angle`, :func:`euler_dcm_rows` and :func:`dcm_euler_angles` use
+only arithmetic and numpy ufuncs, so numba compiles the very same functions
+for the scalar code of the ZUPT kernel (:mod:`pednav_env.nav.zupt_kernel`):
+one implementation, the same results bit for bit.
 """
 
 from __future__ import annotations
@@ -20,8 +25,12 @@ Array = NDArray[np.float64]
 
 
 def wrap_angle(angle: ArrayLike) -> Array:
-    """Wrap angles (rad) into [−π, π)."""
-    a = np.asarray(angle, dtype=float)
+    """Wrap angles (rad) into [−π, π).
+
+    Plain numpy on scalars and arrays, and written so that numba compiles the
+    same function for float scalars (the ZUPT kernel calls it that way).
+    """
+    a = np.asarray(angle, dtype=np.float64)
     # a − 2π ⌊(a + π)/2π⌋: the same as (a + π) mod 2π − π, several times faster than fmod
     return a - (2.0 * np.pi) * np.floor((a + np.pi) * (0.5 / np.pi))
 
@@ -67,30 +76,52 @@ def euler_to_dcm(euler: ArrayLike) -> Array:
     """
     e = np.asarray(euler, dtype=float)
     c, s = np.cos(e), np.sin(e)  # one call each for the three angles
-    cy, sy = c[..., 0], s[..., 0]
-    cp, sp = c[..., 1], s[..., 1]
-    cr, sr = c[..., 2], s[..., 2]
+    rows = euler_dcm_rows(c[..., 0], s[..., 0], c[..., 1], s[..., 1], c[..., 2], s[..., 2])
     C = np.empty(e.shape[:-1] + (3, 3))
-    C[..., 0, 0] = cy * cp
-    C[..., 0, 1] = cy * sp * sr - sy * cr
-    C[..., 0, 2] = cy * sp * cr + sy * sr
-    C[..., 1, 0] = sy * cp
-    C[..., 1, 1] = sy * sp * sr + cy * cr
-    C[..., 1, 2] = sy * sp * cr - cy * sr
-    C[..., 2, 0] = -sp
-    C[..., 2, 1] = cp * sr
-    C[..., 2, 2] = cp * cr
+    for r in range(3):
+        for col in range(3):
+            C[..., r, col] = rows[r][col]
     return C
+
+
+def euler_dcm_rows(
+    cos_yaw: Array,
+    sin_yaw: Array,
+    cos_pitch: Array,
+    sin_pitch: Array,
+    cos_roll: Array,
+    sin_roll: Array,
+) -> tuple[tuple[Array, Array, Array], ...]:
+    """Rows of ``C_nb = R_z(ψ) R_y(θ) R_x(γ)`` (paper 003 eq 1) from the cosines and
+    sines of ψ, θ, γ: the one formula behind :func:`euler_to_dcm` (arrays) and the
+    ZUPT kernel's sigma-point attitudes (numba compiles it for scalars)."""
+    cy, sy, cp, sp, cr, sr = cos_yaw, sin_yaw, cos_pitch, sin_pitch, cos_roll, sin_roll
+    return (
+        (cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
+        (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
+        (-sp, cp * sr, cp * cr),
+    )
+
+
+def dcm_euler_angles(
+    c00: Array, c10: Array, c20: Array, c21: Array, c22: Array
+) -> tuple[Array, Array, Array]:
+    """(ψ, θ, γ) (rad) of ``C_nb`` from its entries C₀₀, C₁₀, C₂₀, C₂₁, C₂₂, 3-2-1 order:
+    ψ = atan2(C₁₀, C₀₀), θ = asin(−C₂₀) (argument clipped to [−1, 1]),
+    γ = atan2(C₂₁, C₂₂). The one formula behind :func:`dcm_to_euler` (arrays) and
+    the ZUPT kernel's sigma-point angles (numba compiles it for scalars)."""
+    yaw = np.arctan2(c10, c00)
+    pitch = np.arcsin(np.minimum(np.maximum(-c20, -1.0), 1.0))
+    roll = np.arctan2(c21, c22)
+    return yaw, pitch, roll
 
 
 def dcm_to_euler(C: ArrayLike) -> Array:
     """Euler angles ``[..., (ψ, θ, γ)]`` (rad) of ``C_nb`` ``(..., 3, 3)``, 3-2-1 order
     (the inverse of :func:`euler_to_dcm`; same conventions as :func:`quat_to_euler`)."""
     C = np.asarray(C, dtype=float)
-    yaw = np.arctan2(C[..., 1, 0], C[..., 0, 0])
-    pitch = np.arcsin(np.clip(-C[..., 2, 0], -1.0, 1.0))
-    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])
-    return np.stack((yaw, pitch, roll), axis=-1)
+    angles = dcm_euler_angles(C[..., 0, 0], C[..., 1, 0], C[..., 2, 0], C[..., 2, 1], C[..., 2, 2])
+    return np.stack(angles, axis=-1)
 
 
 def quat_to_dcm(q: ArrayLike) -> Array:

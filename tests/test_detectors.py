@@ -5,15 +5,17 @@ import pytest
 
 from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.nav.detectors import (
-    OnlineStanceDetector,
     ShoeDetectorConfig,
     ThresholdDetectorConfig,
-    apply_min_duration,
     causal_moving_mean,
     shoe_statistic,
-    threshold_condition,
 )
 from pednav_env.rotations import euler_to_dcm
+from pednav_env.testing.detectors import (
+    OnlineStanceDetector,
+    apply_min_duration,
+    threshold_condition,
+)
 
 
 def true_f_n3(tr):

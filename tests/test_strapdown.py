@@ -91,7 +91,13 @@ def test_preintegrated_increments_equal_sample_by_sample_strapdown():
     """Moving states from sample a to t by the ZUPT kernel's preintegrals (C₀D,
     v₀ + C₀A − gτe₃, x₀ + v₀τ + C₀B − ½gτ²e₃, accumulated sample by sample) is
     the strapdown of eq (3) run over samples a … t−1, to rounding."""
-    from pednav_env.nav.zupt_kernel import _accumulate, _increment, _move_sigmas
+    from pednav_env.nav.preintegration import (
+        Preintegral,
+        accumulate,
+        anchor_force,
+        move_sigmas,
+        strapdown_increment,
+    )
     from pednav_env.rotations import quat_to_dcm
 
     rate = 100.0
@@ -105,13 +111,13 @@ def test_preintegrated_increments_equal_sample_by_sample_strapdown():
         q0 = euler_to_quat(tr.euler[:, s0 + a])
         v0, p0 = tr.vel_n[:, s0 + a], tr.pos_n[:, s0 + a]
         q, v, p = integrate(q0, v0, p0, omega[:, a:t], f[:, a:t], dt, g)
-        D, A, B = np.eye(3), np.zeros(3), np.zeros(3)
+        pre = Preintegral(np.eye(3), np.zeros(3), np.zeros(3))
         for j in range(a, t):
-            _increment(omega[0, j].copy(), f[0, j].copy(), dt, dC, f_mid)
-            F[:] = D @ f_mid
-            _accumulate(D, A, B, F, dC, dt)
+            strapdown_increment(omega[0, j].copy(), f[0, j].copy(), dt, dC, f_mid)
+            anchor_force(pre.D, f_mid, F)
+            accumulate(pre, F, dC, dt)
         C_t, v_t, p_t = quat_to_dcm(q0), v0.copy(), p0.copy()  # (1, 3, 3), (1, 3), (1, 3)
-        _move_sigmas(C_t, v_t, p_t, D, A, B, (t - a) * dt, g)
+        move_sigmas(C_t, v_t, p_t, pre, (t - a) * dt, g)
         np.testing.assert_allclose(C_t, quat_to_dcm(q[:, -1]), rtol=0, atol=1e-12)
         np.testing.assert_allclose(v_t, v[:, -1], rtol=0, atol=1e-12)
         np.testing.assert_allclose(p_t, p[:, -1], rtol=0, atol=1e-12)

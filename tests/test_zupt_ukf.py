@@ -8,7 +8,8 @@ import pytest
 
 from pednav_env.nav.detectors import ShoeDetectorConfig
 from pednav_env.nav.ukf import MerweWeights, repair_covariance
-from pednav_env.nav.zupt_ukf import ZuptUkf, ZuptUkfConfig
+from pednav_env.nav.zupt_config import ZuptUkfConfig
+from pednav_env.nav.zupt_ukf import ZuptUkf
 from pednav_env.sensors.imu import ImuSpec, simulate_imu
 
 RATE = 100.0
@@ -213,13 +214,13 @@ def test_advance_rejects_bad_blocks():
 def test_engine_stance_logic_equals_the_offline_detectors(paper_walk):
     """The kernel's detector (causal window, minimum stance duration, SHOE
     condition) flags the same samples as the offline numpy detectors of
-    :mod:`pednav_env.nav.detectors` on the same inputs."""
+    :mod:`pednav_env.testing.detectors` on the same inputs."""
     from pednav_env.nav.detectors import (
         ThresholdDetectorConfig,
-        apply_min_duration,
         causal_moving_mean,
         shoe_statistic,
     )
+    from pednav_env.testing.detectors import apply_min_duration
 
     imu = noisy(paper_walk, 3, seed=11)
     omega, f = imu.omega_b, imu.f_b

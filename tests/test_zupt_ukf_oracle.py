@@ -10,7 +10,9 @@ relative over a whole simulated walk.
 import numpy as np
 
 from pednav_env.nav.alignment import align_static
-from pednav_env.nav.zupt_ukf import ZuptUkf, ZuptUkfConfig, process_noise, propagate_state
+from pednav_env.nav.zupt_config import ZuptUkfConfig
+from pednav_env.nav.zupt_model import process_noise, propagate_state
+from pednav_env.nav.zupt_ukf import ZuptUkf
 from pednav_env.sensors.imu import ImuSpec, simulate_imu
 from pednav_env.testing.reference_foot import filterpy_zupt_ukf, zupt_noise
 

@@ -38,7 +38,8 @@ from pednav_env.gait.foot_route import (
     square_route,
 )
 from pednav_env.nav.detectors import run_lengths
-from pednav_env.nav.zupt_ukf import ZuptUkf, ZuptUkfConfig
+from pednav_env.nav.zupt_config import ZuptUkfConfig
+from pednav_env.nav.zupt_ukf import ZuptUkf
 from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
 
 Array = NDArray[np.float64]
@@ -241,13 +242,18 @@ class FootZuptCore:
         )
         self.cursor[lanes] = self.n_align
         self.nav_samples[lanes] = np.maximum(self.length[lanes] - self.n_align, 1)
+        self._restart_episodes(lanes)
+        self.obs[lanes] = self._features(lanes, None)
+
+    def _restart_episodes(self, lanes: NDArray[np.integer]) -> None:
+        """Action 0 (the paper filter) and cleared counters and stance statistics
+        for lanes whose new episode is loaded and whose filter is initialised."""
         self.action[lanes] = 0.0
         self.clipped[lanes] = 0
         self.stance_avg_s[lanes] = 0.0
         self.stance_len[lanes] = 0
         self.last_error[lanes] = 0.0
         self._apply_action(lanes)
-        self.obs[lanes] = self._features(lanes, None)
 
     # ------------------------------------------------------------------ action
     def validate_action(self, action: Any) -> Array:

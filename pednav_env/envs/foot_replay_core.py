@@ -36,7 +36,7 @@ from pednav_env.io.load import find_recordings, load_recording
 from pednav_env.io.recording import Recording
 from pednav_env.io.validate import LoadOptions
 from pednav_env.nav.detectors import ThresholdDetectorConfig, causal_moving_mean, window_samples
-from pednav_env.nav.zupt_ukf import ZuptUkfConfig
+from pednav_env.nav.zupt_config import ZuptUkfConfig
 from pednav_env.replay.metrics import best_rotation, rotate_h
 from pednav_env.replay.runner import PreparedRecording, prepare, run_prepared
 from pednav_env.replay.setup import RealFilterSetup, named_setup
@@ -252,12 +252,7 @@ class FootReplayCore(FootZuptCore):
             )
             self.cursor[lane] = na
             self.nav_samples[lane] = max(p.num_samples - na, 1)
-        self.action[lanes] = 0.0
-        self.clipped[lanes] = 0
-        self.stance_avg_s[lanes] = 0.0
-        self.stance_len[lanes] = 0
-        self.last_error[lanes] = 0.0
-        self._apply_action(lanes)
+        self._restart_episodes(lanes)
         for lane in lanes:  # the reset features describe each lane's own alignment window
             self.n_align = int(self.lane_align[lane])
             self.obs[lane] = self._features(np.array([lane]), None)[0]

@@ -1,10 +1,11 @@
-"""Stance (zero-velocity) detectors, batched and causal.
+"""Stance (zero-velocity) detectors: configurations and the record-level pieces.
 
 - :class:`ThresholdDetectorConfig` — paper 003 eq (5): stance where
   |ω'| ≤ ω_max and |f'_x3 − g| ≤ Δf_max, f'_x3 the vertical specific force in
-  the navigation frame (it needs the filter's attitude, so it is evaluated
-  inside the filter loop). Optional causal moving averages over
-  ``window_s`` (0 = sample by sample, as printed).
+  the navigation frame. It needs the filter's attitude, so it is evaluated
+  inside the filter loop, by the compiled ZUPT kernel
+  (:func:`pednav_env.nav.zupt_kernel.eq5_condition`), with optional causal
+  moving averages over ``window_s`` (0 = sample by sample, as printed).
 - :class:`ShoeDetectorConfig` — the SHOE / GLRT statistic of Skog, Händel,
   Nilsson, Rantakokko (2010), "Zero-velocity detection — an algorithm
   evaluation", IEEE TBME 57(11), eq (11):
@@ -12,13 +13,15 @@
       T_k = (1/W) Σ_{window} [ |f_j − g f̄/|f̄||² / σ_a² + |ω_j|² / σ_ω² ]
 
   stance where T_k < γ. It uses the IMU only, over the causal window ending
-  at sample k. Because the terms are divided by σ², the threshold γ scales
-  like 1/σ² when a configuration moves to a sensor with other noise.
+  at sample k, so :func:`shoe_statistic` computes it here for whole records
+  and the kernel compares it with γ per sample.
 
 Both take windows and minimum durations in seconds, so a configuration
-carries over between sample rates. Minimum-duration logic: stance is declared
-once the condition has held for ``min_stance_s`` (online: the declaration is
-delayed, never back-dated).
+carries over between sample rates. Minimum-duration logic (in the kernel):
+stance is declared once the condition has held for ``min_stance_s`` (online:
+the declaration is delayed, never back-dated). Numpy versions of eq (5) and
+of the stance logic, the oracle of the kernel's detector in the tests, are in
+:mod:`pednav_env.testing.detectors`.
 """
 
 from __future__ import annotations
@@ -113,6 +116,17 @@ def window_samples(window_s: float, rate_hz: float) -> int:
     return max(1, int(round(window_s * rate_hz)))
 
 
+def detector_window(config: DetectorConfig, rate_hz: float) -> int:
+    """Causal window W (samples) of a detector: eq (5) averages its inputs over W
+    samples (1 when ``window_s`` = 0), SHOE's statistic covers W samples."""
+    return window_samples(config.window_s, rate_hz) if config.window_s > 0 else 1
+
+
+def min_stance_samples(min_stance_s: Array | float, rate_hz: float) -> NDArray[np.int64]:
+    """Minimum stance duration(s) in samples (at least 1)."""
+    return np.maximum(1, np.round(np.asarray(min_stance_s) * rate_hz)).astype(np.int64)
+
+
 def causal_moving_mean(x: Array, n: int) -> Array:
     """Mean over the last ``n`` samples along axis 1 (shorter at the start)."""
     x = np.asarray(x, dtype=float)
@@ -142,29 +156,6 @@ def shoe_statistic(omega_b: Array, f_b: Array, config: ShoeDetectorConfig, rate_
     return acc_term / config.accel_noise_std**2 + gyro_term / config.gyro_noise_std**2
 
 
-def threshold_condition(
-    omega_b: Array, f_n3: Array, config: ThresholdDetectorConfig, rate_hz: float
-) -> NDArray[np.bool_]:
-    """Eq (5) on whole records: ``omega_b`` (N, T, 3), ``f_n3`` (N, T) (m/s²)."""
-    n = window_samples(config.window_s, rate_hz) if config.window_s > 0 else 1
-    w = causal_moving_mean(np.linalg.norm(omega_b, axis=-1), n)
-    f = causal_moving_mean(np.asarray(f_n3, dtype=float), n)
-    return (w <= config.omega_max) & (np.abs(f - config.g) <= config.delta_f_max)
-
-
-def apply_min_duration(condition: NDArray[np.bool_], min_samples: int) -> NDArray[np.bool_]:
-    """Stance declared once ``condition`` held for ``min_samples`` samples (causal)."""
-    condition = np.asarray(condition, dtype=bool)
-    if min_samples <= 1:
-        return condition.copy()
-    run = np.zeros(condition.shape[0], dtype=np.int64)
-    out = np.zeros_like(condition)
-    for m in range(condition.shape[1]):
-        run = np.where(condition[:, m], run + 1, 0)
-        out[:, m] = run >= min_samples
-    return out
-
-
 def run_lengths(flags: NDArray[np.bool_], carried: NDArray[np.integer]) -> NDArray[np.int64]:
     """For flags ``(B, K)``, how many samples in a row each flag has been true up to
     and including sample k (0 where it is false); ``carried`` (B,) is the run
@@ -174,148 +165,3 @@ def run_lengths(flags: NDArray[np.bool_], carried: NDArray[np.integer]) -> NDArr
     idx = np.arange(k)
     last_false = np.maximum.accumulate(np.where(flags, -1, idx[None, :]), axis=1)
     return np.where(last_false >= 0, idx[None, :] - last_false, carried[:, None] + idx + 1)
-
-
-@dataclass(frozen=True)
-class DetectorPass:
-    """Detector output over K samples of B walkers (not yet committed)."""
-
-    stance: NDArray[np.bool_]  # (B, K) in stance after each sample
-    start: NDArray[np.bool_]  # (B, K) stance declared at this sample
-    end: NDArray[np.bool_]  # (B, K) stance ended at this sample
-    run: NDArray[np.int64]  # (B,) samples the condition has held at the last sample
-    history: Array  # (B, W-1, 2) last window inputs, oldest first (eq 5 only)
-    count: NDArray[np.int64]  # (B,) samples seen, capped at the window length
-
-
-class OnlineStanceDetector:
-    """Causal detector state for N walkers, fed any number of samples at a time.
-
-    Thresholds can change between calls (per walker) — they are what an agent
-    tunes. For the SHOE detector the statistic is computed from the raw IMU
-    record (:func:`shoe_statistic`) and its condition passed in; for eq (5)
-    the caller passes |ω'| and f'_x3, and the detector keeps the causal window
-    inputs. :meth:`evaluate_threshold` / :meth:`evaluate_condition` compute a
-    :class:`DetectorPass` for a block of samples without changing the state
-    (the filter may re-evaluate a block after a correction changed its
-    attitude); :meth:`commit` stores the state at the block's end.
-    """
-
-    def __init__(self, config: DetectorConfig, rate_hz: float, num_walkers: int) -> None:
-        if not (math.isfinite(rate_hz) and rate_hz > 0):
-            raise ValueError(f"rate_hz must be > 0, got {rate_hz!r}")
-        self.config = config
-        self.rate_hz = rate_hz
-        self.n = num_walkers
-        w = window_samples(config.window_s, rate_hz) if config.window_s > 0 else 1
-        self.window = w
-        # Window inputs (|ω'|, f'_x3) of the last W−1 samples, oldest first; zeros
-        # before the first sample, which the count leaves out of the mean.
-        self.history = np.zeros((num_walkers, w - 1, 2))
-        self.count = np.zeros(num_walkers, dtype=np.int64)
-        self.run = np.zeros(num_walkers, dtype=np.int64)
-        self.in_stance = np.zeros(num_walkers, dtype=bool)
-
-    def reset(self, mask: NDArray[np.bool_] | None = None) -> None:
-        sel = slice(None) if mask is None else mask
-        self.history[sel] = 0.0
-        self.count[sel] = 0
-        self.run[sel] = 0
-        self.in_stance[sel] = False
-
-    def min_samples(self, min_stance_s: Array | float) -> NDArray[np.int64]:
-        """Minimum stance duration in samples (at least 1)."""
-        return np.maximum(1, np.round(np.asarray(min_stance_s) * self.rate_hz)).astype(np.int64)
-
-    def window_condition(
-        self,
-        lanes: NDArray[np.integer],
-        omega_norm: Array,
-        f_n3: Array,
-        omega_max: Array,
-        delta_f_max: Array,
-    ) -> tuple[NDArray[np.bool_], Array, NDArray[np.int64]]:
-        """Eq (5) with causal window means over ``(B, K)`` inputs of walkers
-        ``lanes``: the condition and the window state after the block."""
-        w = self.window
-        count = self.count[lanes]
-        k = omega_norm.shape[1]
-        if w == 1:
-            om, fm, hist = omega_norm, f_n3, self.history[lanes]
-        else:
-            x = np.concatenate((self.history[lanes], np.stack((omega_norm, f_n3), axis=-1)), axis=1)
-            sums = np.lib.stride_tricks.sliding_window_view(x, w, axis=1).sum(axis=-1)
-            seen = np.minimum(count[:, None] + np.arange(1, k + 1)[None, :], w)
-            om, fm = sums[..., 0] / seen, sums[..., 1] / seen
-            hist = x[:, k:]
-        cond = (om <= omega_max[:, None]) & (np.abs(fm - self.config.g) <= delta_f_max[:, None])
-        return cond, hist, np.minimum(count + k, w)
-
-    def evaluate_threshold(
-        self,
-        lanes: NDArray[np.integer],
-        omega_norm: Array,
-        f_n3: Array,
-        omega_max: Array,
-        delta_f_max: Array,
-        min_stance_s: Array,
-    ) -> DetectorPass:
-        """Eq (5) and the stance logic over ``(B, K)`` inputs of walkers ``lanes``."""
-        cond, hist, count = self.window_condition(lanes, omega_norm, f_n3, omega_max, delta_f_max)
-        return self._machine(lanes, cond, min_stance_s, hist, count)
-
-    def evaluate_condition(
-        self, lanes: NDArray[np.integer], condition: NDArray[np.bool_], min_stance_s: Array
-    ) -> DetectorPass:
-        """Stance logic over a given condition ``(B, K)`` (e.g. SHOE's T_k < γ)."""
-        k = condition.shape[1]
-        count = np.minimum(self.count[lanes] + k, self.window)
-        return self._machine(lanes, condition, min_stance_s, self.history[lanes], count)
-
-    def _machine(
-        self,
-        lanes: NDArray[np.integer],
-        cond: NDArray[np.bool_],
-        min_stance_s: Array,
-        history: Array,
-        count: NDArray[np.int64],
-    ) -> DetectorPass:
-        run = run_lengths(cond, self.run[lanes])
-        now = run >= self.min_samples(min_stance_s)[:, None]
-        before = np.concatenate((self.in_stance[lanes, None], now[:, :-1]), axis=1)
-        return DetectorPass(now, now & ~before, before & ~now, run[:, -1], history, count)
-
-    def commit(self, lanes: NDArray[np.integer], result: DetectorPass) -> None:
-        """Store the state at the end of an evaluated block."""
-        self.run[lanes] = result.run
-        self.in_stance[lanes] = result.stance[:, -1]
-        self.history[lanes] = result.history
-        self.count[lanes] = result.count
-
-    # one-sample interface ---------------------------------------------------------
-    def condition_threshold(
-        self, omega_norm: Array, f_n3: Array, omega_max: Array, delta_f_max: Array
-    ) -> NDArray[np.bool_]:
-        """Eq (5) for one sample of every walker with causal window means;
-        advances the window (use with :meth:`advance`)."""
-        lanes = np.arange(self.n)
-        cond, self.history[:], self.count[:] = self.window_condition(
-            lanes,
-            np.asarray(omega_norm, dtype=float).reshape(self.n, 1),
-            np.asarray(f_n3, dtype=float).reshape(self.n, 1),
-            np.broadcast_to(np.asarray(omega_max, dtype=float), (self.n,)),
-            np.broadcast_to(np.asarray(delta_f_max, dtype=float), (self.n,)),
-        )
-        return cond[:, 0]
-
-    def advance(
-        self, condition: NDArray[np.bool_], min_stance_s: Array | float
-    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-        """Feed one sample's condition; return (stance_start, stance_end) events."""
-        lanes = np.arange(self.n)
-        ms = np.broadcast_to(np.asarray(min_stance_s, dtype=float), (self.n,))
-        res = self.evaluate_condition(lanes, np.asarray(condition).reshape(self.n, 1), ms)
-        self.run[:] = res.run
-        self.in_stance[:] = res.stance[:, 0]
-        return res.start[:, 0], res.end[:, 0]
-

@@ -20,9 +20,11 @@ oracle of the tests:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 Array = NDArray[np.float64]
@@ -76,18 +78,63 @@ def symmetrize(P: Array) -> Array:
     return 0.5 * (P + np.swapaxes(P, -1, -2))
 
 
+@njit(cache=True)
+def floored_covariance(A: np.ndarray, out: np.ndarray) -> bool:
+    """Eigenvalue floor of one covariance, the one implementation of the repair.
+
+    ``out`` ← sym(V max(Λ, λ_min) Vᵀ) with V Λ Vᵀ the eigendecomposition of
+    sym(A) = (A + Aᵀ)/2 (non-finite entries of A counted as 0) and
+    λ_min = max(:data:`EIGEN_FLOOR_RELATIVE` |λ_max|, :data:`EIGEN_FLOOR_ABSOLUTE`).
+    Returns whether an eigenvalue was below λ_min (the matrix needed the floor).
+    Used by :func:`repair_covariance` and by the ZUPT kernel's sigma-point draw.
+    """
+    n = A.shape[0]
+    S = np.empty((n, n))
+    for r in range(n):
+        for c in range(n):
+            a, b = A[r, c], A[c, r]
+            a = a if math.isfinite(a) else 0.0
+            b = b if math.isfinite(b) else 0.0
+            S[r, c] = 0.5 * (a + b)
+    w, V = np.linalg.eigh(S)
+    floor = max(EIGEN_FLOOR_RELATIVE * abs(w[n - 1]), EIGEN_FLOOR_ABSOLUTE)
+    needed = False
+    for k in range(n):
+        if not (w[k] >= floor):
+            needed = True
+        w[k] = max(w[k], floor)
+    for r in range(n):
+        for c in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += V[r, k] * w[k] * V[c, k]
+            out[r, c] = acc
+    for r in range(n):
+        for c in range(r + 1, n):
+            m = 0.5 * (out[r, c] + out[c, r])
+            out[r, c] = m
+            out[c, r] = m
+    return needed
+
+
+@njit(cache=True)
+def _floored_batch(P: np.ndarray, out: np.ndarray, needed: np.ndarray) -> None:
+    for b in range(P.shape[0]):
+        needed[b] = floored_covariance(P[b], out[b])
+
+
 def repair_covariance(P: Array) -> tuple[Array, NDArray[np.bool_]]:
-    """Symmetrise and floor the eigenvalues of covariances that are not PD.
+    """Symmetrise covariances ``(..., n, n)`` and floor the eigenvalues of those that
+    are not positive definite (:func:`floored_covariance`).
 
     Returns the repaired ``P`` and a boolean mask of the matrices that needed
-    an eigenvalue floor.
+    an eigenvalue floor; the others come back symmetrised only.
     """
-    P = symmetrize(P)
-    w, V = np.linalg.eigh(P)
-    floor = np.maximum(EIGEN_FLOOR_RELATIVE * np.abs(w[..., -1:]), EIGEN_FLOOR_ABSOLUTE)
-    bad = np.any(w < floor, axis=-1) | ~np.all(np.isfinite(w), axis=-1)
-    if np.any(bad):
-        wf = np.maximum(np.nan_to_num(w[bad], nan=0.0), floor[bad])
-        P = P.copy()
-        P[bad] = symmetrize(np.einsum("bij,bj,bkj->bik", V[bad], wf, V[bad]))
-    return P, bad
+    P = symmetrize(np.asarray(P, dtype=float))
+    n = P.shape[-1]
+    flat = np.ascontiguousarray(P.reshape(-1, n, n))
+    floored = np.empty_like(flat)
+    needed = np.zeros(flat.shape[0], dtype=bool)
+    _floored_batch(flat, floored, needed)
+    bad = needed.reshape(P.shape[:-2])
+    return np.where(bad[..., None, None], floored.reshape(P.shape), P), bad

@@ -6,7 +6,10 @@ function f: the strapdown (eq 3, :mod:`pednav_env.nav.strapdown`) integrated
 from one correction instant to the next; corrections at every detected stance
 start and stance end (eq 5 or SHOE) with
 
-    h(y) = [x₃, v₁, v₂, v₃],   z = [x₃(t₀), 0, 0, 0]   (flat ground, zero velocity).
+    h(y) = [x₃, v₁, v₂, v₃],   z = [x₃(t₀), 0, 0, 0]   (flat ground, zero velocity)
+
+(the model functions and Q: :mod:`pednav_env.nav.zupt_model`). The filter
+starts from paper 003's static alignment (eq 4, :meth:`ZuptUkf.initialize`).
 
 One engine for every walker: :class:`ZuptUkf` holds the sigma points of N
 walkers, ``(N, 2L+1, ·)``, and :meth:`ZuptUkf.advance` moves all of them
@@ -26,245 +29,56 @@ the central sigma point) is checked on the prior of every ZUPT and at every
 sample after a walker's last ZUPT of the block; a diverged walker gets no more
 ZUPTs and is frozen at its last posterior.
 
-Choices the paper leaves open (docs/REPRODUCTION.md):
-
-- process noise Q for an interval τ from the filter's *assumed* IMU model:
-  velocity random walk q_v = σ_f² Δt (σ_f per sample), Q_xx = q_v τ³/3,
-  Q_xv = q_v τ²/2, Q_vv = q_v τ; attitude q_θ = σ_ω² Δt, Q_θθ = q_θ τ plus the
-  gyro drift, (σ_ν τ)² per gait step or σ_ν² Δt τ per sample, plus turn-on
-  biases as (σ_b τ)² terms; all times ``process_noise_scale``. The paper's
-  printed P⁻ has no Q at all;
-- ZUPT noise R = diag(σ_h², σ_v², σ_v², σ_v²) · ``zupt_noise_scale`` with
-  σ_h = σ_v = 0.01 (m, m/s);
-- like filterpy 2.0 (the oracle), the measurement step uses sigma points
-  redrawn from the prior (which includes Q), not the propagated ones the
-  paper prints (which would leave Q out of S); with the linear h the update
-  is then exactly the Kalman update on the unscented prior, which is how it
-  is computed (no second draw; the filterpy oracle test checks the equality);
-- optional χ² gating of a ZUPT on its NIS (off in the paper scenario).
+Like filterpy 2.0 (the oracle), the measurement step uses sigma points redrawn
+from the prior (which includes Q), not the propagated ones the paper prints
+(which would leave Q out of S); with the linear h the update is then exactly
+the Kalman update on the unscented prior, which is how it is computed (no
+second draw; the filterpy oracle test checks the equality). The other choices
+the paper leaves open (Q, R, gating) are listed in
+:mod:`pednav_env.nav.zupt_config`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from enum import StrEnum
+from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.nav.alignment import align_static
 from pednav_env.nav.detectors import (
-    DetectorConfig,
-    OnlineStanceDetector,
     ShoeDetectorConfig,
-    ThresholdDetectorConfig,
+    detector_window,
+    min_stance_samples,
+    shoe_statistic,
 )
-from pednav_env.nav.strapdown import advance_sigma, step_increments
-from pednav_env.nav.ukf import MerweWeights, repair_covariance
-from pednav_env.nav.zupt_kernel import advance_block, redraw_sigmas
-from pednav_env.rotations import (
-    euler_to_quat,
-    quat_to_euler,
-    wrap_angle,
+from pednav_env.nav.ukf import repair_covariance
+from pednav_env.nav.zupt_config import UpdateMode, ZuptUkfConfig
+from pednav_env.nav.zupt_kernel import (
+    BlockInput,
+    BlockOutput,
+    DetectorState,
+    KernelSettings,
+    UkfModel,
+    UpdateLog,
+    WalkerFilters,
+    WalkerKnobs,
+    advance_block,
+    redraw_sigmas,
 )
-from pednav_env.sensors.imu import DriftModel, ImuSpec
+from pednav_env.nav.zupt_model import STATE_DIM, dcm_to_state, process_noise_basis, state_mean
 
 Array = NDArray[np.float64]
 
-STATE_DIM = 9
-#: State layout of paper 003: position, velocity, pitch θ, roll γ, yaw ψ.
-STATE_NAMES = ("x1", "x2", "x3", "v1", "v2", "v3", "pitch", "roll", "yaw")
-ANGLES = slice(6, 9)
-#: Indices of h(y) = [x₃, v₁, v₂, v₃].
-MEASURED = [2, 3, 4, 5]
 #: Velocity norm beyond which a walker is declared diverged (m/s).
 DIVERGENCE_SPEED = 50.0
 #: Samples per :meth:`ZuptUkf.advance` call in :meth:`ZuptUkf.run`.
 RUN_BLOCK = 100
-
-
-# --------------------------------------------------------------------------- model functions
-def _wrap_angles_inplace(y: Array) -> None:
-    """Wrap the angle entries of states ``(..., 9)`` into [−π, π), in place;
-    a no-op check when they already are (the usual case for residuals)."""
-    a = y[..., ANGLES]
-    if a.size and (a.max() >= np.pi or a.min() < -np.pi):
-        y[..., ANGLES] = wrap_angle(a)
-
-
-def state_residual(a: Array, b: Array) -> Array:
-    """a − b with wrapped angle differences (filterpy's ``residual_x``)."""
-    d = np.asarray(a, dtype=float) - b
-    _wrap_angles_inplace(d)
-    return d
-
-
-def state_add(x: Array, dx: Array) -> Array:
-    """x + dx with wrapped angles (filterpy's ``state_add``)."""
-    y = np.asarray(x, dtype=float) + dx
-    _wrap_angles_inplace(y)
-    return y
-
-
-def state_mean(sigmas: Array, Wm: Array) -> Array:
-    """Weighted mean of sigma points ``(..., S, 9)``; angles averaged as wrapped
-    deviations from the central point (filterpy's ``x_mean_fn``)."""
-    sigmas = np.asarray(sigmas, dtype=float)
-    ref = sigmas[..., 0, :]
-    d = state_residual(sigmas, ref[..., None, :])
-    return state_add(ref, np.einsum("s,...sd->...d", Wm, d))
-
-
-def state_to_nav(y: Array) -> tuple[Array, Array, Array]:
-    """(q_nb, v, x) from state vectors ``(..., 9)``."""
-    euler = np.stack((y[..., 8], y[..., 6], y[..., 7]), axis=-1)
-    return euler_to_quat(euler), y[..., 3:6].copy(), y[..., 0:3].copy()
-
-
-def nav_to_state(q_nb: Array, vel_n: Array, pos_n: Array) -> Array:
-    """State vectors ``(..., 9)`` from attitude, velocity and position."""
-    e = quat_to_euler(q_nb)
-    return np.concatenate((pos_n, vel_n, e[..., 1:2], e[..., 2:3], e[..., 0:1]), axis=-1)
-
-
-def propagate_state(
-    y: Array, omega_b: Array, f_b: Array, rate_hz: float, g: float = STANDARD_GRAVITY
-) -> Array:
-    """Process function f: integrate states ``(B, S, 9)`` through IMU samples
-    ``(B, M, 3)`` (paper 003: f = integration of eq 3 over the interval)."""
-    dt = 1.0 / rate_hz
-    q, v, p = state_to_nav(y)
-    dqT, f_mid = step_increments(omega_b, f_b, dt)
-    for m in range(omega_b.shape[1]):
-        q, v, p = advance_sigma(q, v, p, dqT[:, m], f_mid[:, m], dt, g)
-    return nav_to_state(q, v, p)
-
-
-def measure(y: Array) -> Array:
-    """h(y) = [x₃, v₁, v₂, v₃] (paper 003)."""
-    return y[..., MEASURED]
-
-
-class UpdateMode(StrEnum):
-    """When ZUPTs are applied."""
-
-    #: At each detected stance start and stance end (paper 003).
-    STANCE_BOUNDARIES = "stance_boundaries"
-    #: At every sample of a detected stance (common practice, e.g. OpenShoe).
-    EVERY_STANCE_SAMPLE = "every_stance_sample"
-
-
-@dataclass(frozen=True)
-class ZuptUkfConfig:
-    """Configuration of the ZUPT-UKF; defaults = paper 003's simulation."""
-
-    detector: DetectorConfig = field(default_factory=ThresholdDetectorConfig)
-    #: The filter's assumed IMU model, source of Q (paper 003's sensor).
-    assumed_imu: ImuSpec = field(default_factory=ImuSpec.paper003)
-    alpha: float = 1e-3  # paper 003: a ~ 1e-3
-    beta: float = 0.0  # paper 003 prints W0c = λ/(λ+L) + (1 − a²), i.e. β = 0
-    kappa: float = 0.0  # paper 003: λ = a²L − L
-    zupt_height_std: float = 0.01  # m, not printed
-    zupt_velocity_std: float = 0.01  # m/s, not printed
-    process_noise_scale: float = 1.0
-    zupt_noise_scale: float = 1.0
-    update_mode: UpdateMode = UpdateMode.STANCE_BOUNDARIES
-    #: χ² gate probability for ZUPTs (None = no gate, paper 003).
-    gate_probability: float | None = None
-    initial_position_std: float = 1e-3  # m: the start position is known
-    initial_velocity_std: float = 1e-2  # m/s: standing still
-    initial_tilt_std: float = 1e-2  # rad: eq (4) from noisy data
-    initial_yaw_std: float = 1e-3  # rad: ψ = 0 defines the frame
-    #: Static alignment window at the start (s); paper 003 eq (4).
-    alignment_s: float = 1.0
-    #: Subtract the mean gyro reading of the alignment window from every later
-    #: sample (paper 003's real-data calibration, "b_ω = ⟨ω''⟩ before walking").
-    #: Off for the paper's simulation, whose drift changes every step.
-    calibrate_gyro_bias: bool = False
-    g: float = STANDARD_GRAVITY
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "update_mode", UpdateMode(self.update_mode))
-        for name in (
-            "alpha",
-            "zupt_height_std",
-            "zupt_velocity_std",
-            "process_noise_scale",
-            "zupt_noise_scale",
-            "initial_position_std",
-            "initial_velocity_std",
-            "initial_tilt_std",
-            "initial_yaw_std",
-            "alignment_s",
-            "g",
-        ):
-            v = getattr(self, name)
-            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
-                raise ValueError(f"ZuptUkfConfig.{name} must be a finite number > 0, got {v!r}")
-        if not math.isfinite(self.beta):
-            raise ValueError(f"ZuptUkfConfig.beta must be finite, got {self.beta!r}")
-        if self.gate_probability is not None and not (0 < self.gate_probability < 1):
-            raise ValueError(
-                f"ZuptUkfConfig.gate_probability must be in (0, 1), got {self.gate_probability!r}"
-            )
-        MerweWeights(STATE_DIM, self.alpha, self.beta, self.kappa)  # validates α, κ
-
-    @property
-    def weights(self) -> MerweWeights:
-        return MerweWeights(STATE_DIM, self.alpha, self.beta, self.kappa)
-
-
-def process_noise_basis(spec: ImuSpec, rate_hz: float) -> Array:
-    """Q(τ) = Σ_{p=1..4} τᵖ M_p: the constant matrices M_p ``(4, 9, 9)`` of the
-    process noise below (module docstring), a polynomial in the interval τ."""
-    dt = 1.0 / rate_hz
-    q_v = spec.accel_noise_std(rate_hz) ** 2 * dt
-    q_th = spec.gyro_noise_std(rate_hz) ** 2 * dt
-    ba2, bg2 = spec.accel_bias_std**2, spec.gyro_bias_std**2
-    drift2 = spec.gyro_step_drift_std**2
-    per_step = spec.drift_model is DriftModel.PER_GAIT_STEP
-    # coefficients of τ, τ², τ³, τ⁴
-    ang = (
-        q_th + (0.0 if per_step else drift2 * dt),
-        bg2 + (drift2 if per_step else 0.0),
-        spec.gyro_bias_rw_density**2 / 3,
-        0.0,
-    )
-    vv = (q_v, ba2, spec.accel_bias_rw_density**2 / 3, 0.0)
-    xx = (0.0, 0.0, q_v / 3, ba2 / 4)
-    xv = (0.0, q_v / 2, ba2 / 2, 0.0)
-    M = np.zeros((4, STATE_DIM, STATE_DIM))
-    i3 = np.arange(3)
-    for p in range(4):
-        M[p, i3, i3] = xx[p]
-        M[p, i3 + 3, i3 + 3] = vv[p]
-        M[p, i3, i3 + 3] = M[p, i3 + 3, i3] = xv[p]
-        M[p, i3 + 6, i3 + 6] = ang[p]
-    return M
-
-
-def process_noise(
-    spec: ImuSpec,
-    rate_hz: float,
-    elapsed_s: Array,
-    scale: Array,
-    basis: Array | None = None,
-) -> Array:
-    """Q ``(B, 9, 9)`` for intervals ``elapsed_s`` ``(B,)`` (see module docstring);
-    ``basis`` = :func:`process_noise_basis` of the same spec, if computed ahead."""
-    tau = np.asarray(elapsed_s, dtype=float)
-    if basis is None:
-        basis = process_noise_basis(spec, rate_hz)
-    powers = tau[:, None] ** np.arange(1, 5) * np.asarray(scale, dtype=float)[:, None]
-    # Only the entries of the basis' pattern are formed, elementwise (not a BLAS
-    # product: a walker's Q must not depend on the batch size).
-    rows, cols = np.nonzero(basis.any(axis=0))
-    Q = np.zeros(tau.shape + (STATE_DIM, STATE_DIM))
-    Q[:, rows, cols] = (powers[:, :, None] * basis[:, rows, cols]).sum(axis=1)
-    return Q
+#: Kinds of ZUPT in :class:`UpdateRecord`, by the kernel's code.
+_KINDS = ("start", "end", "stance")
 
 
 @dataclass
@@ -297,17 +111,6 @@ class BlockResult:
     states: Array | None  # (N, K, 9) mean state after each sample (record="state")
 
 
-def dcm_to_state(C_nb: Array, vel_n: Array, pos_n: Array) -> Array:
-    """State vectors ``(..., 9)`` from attitude matrix, velocity and position."""
-    y = np.empty(np.broadcast_shapes(C_nb.shape[:-2], vel_n.shape[:-1]) + (STATE_DIM,))
-    y[..., 0:3], y[..., 3:6] = pos_n, vel_n
-    # Euler angles of C_nb as in rotations.dcm_to_euler, written in place
-    y[..., 6] = np.arcsin(np.clip(-C_nb[..., 2, 0], -1.0, 1.0))
-    y[..., 7] = np.arctan2(C_nb[..., 2, 1], C_nb[..., 2, 2])
-    y[..., 8] = np.arctan2(C_nb[..., 1, 0], C_nb[..., 0, 0])
-    return y
-
-
 @dataclass
 class ZuptRun:
     """Output of :meth:`ZuptUkf.run` over whole records."""
@@ -320,6 +123,15 @@ class ZuptRun:
     repairs: NDArray[np.int64]  # (N,) covariance repairs
     diverged: NDArray[np.bool_]  # (N,)
     P_final: Array  # (N, 9, 9)
+
+
+class ZuptTallies(NamedTuple):
+    """Per-walker counts of :class:`ZuptUkf` (copies)."""
+
+    updates: NDArray[np.int64]  # (N,) ZUPTs applied
+    rejected: NDArray[np.int64]  # (N,) ZUPTs rejected by the gate
+    repairs: NDArray[np.int64]  # (N,) covariance repairs
+    diverged: NDArray[np.bool_]  # (N,)
 
 
 class ZuptUkf:
@@ -344,21 +156,18 @@ class ZuptUkf:
         self.config = config
         self.rate_hz = float(rate_hz)
         self.dt = 1.0 / self.rate_hz
-        self.n = int(num_walkers)
+        self.n = n = int(num_walkers)
         self.weights = config.weights
-        self.q_basis = process_noise_basis(config.assumed_imu, self.rate_hz)
         #: R at zupt_noise_scale = 1: diag(σ_h², σ_v², σ_v², σ_v²).
         self.zupt_noise_base = np.diag(
             np.array([config.zupt_height_std] + [config.zupt_velocity_std] * 3) ** 2
         )
         self.num_sigmas = 2 * STATE_DIM + 1
-        self.detector = OnlineStanceDetector(config.detector, self.rate_hz, self.n)
-        self.uses_shoe = isinstance(config.detector, ShoeDetectorConfig)
+        det = config.detector
+        self.uses_shoe = isinstance(det, ShoeDetectorConfig)
         self.gate_nis = (
             None if config.gate_probability is None else float(chi2.ppf(config.gate_probability, 4))
         )
-        det = config.detector
-        n = self.n
         self.omega_max = np.full(n, getattr(det, "omega_max", np.nan))
         self.delta_f_max = np.full(n, getattr(det, "delta_f_max", np.nan))
         self.shoe_threshold = np.full(n, getattr(det, "threshold", np.nan))
@@ -384,18 +193,25 @@ class ZuptUkf:
         self.last_nis = np.zeros(n)
         self.time_since_update_s = np.zeros(n)
         self.gyro_bias = np.zeros((n, 3))
-        self._Wm, self._Wc = self.weights.Wm, self.weights.Wc
-        self._kernel_params = np.array(
-            [
-                self.dt,
-                config.g,
-                det.g,
-                np.inf if self.gate_nis is None else self.gate_nis,
-                float(self.uses_shoe),
-                float(config.update_mode is UpdateMode.STANCE_BOUNDARIES),
-                STATE_DIM + self.weights.lam,
-                DIVERGENCE_SPEED,
-            ]
+        window = detector_window(det, self.rate_hz)
+        self.detector_state = DetectorState(
+            np.zeros((n, window - 1, 2)),
+            np.zeros(n, dtype=np.int64),
+            np.zeros(n, dtype=np.int64),
+            np.zeros(n, dtype=bool),
+        )
+        self.model = UkfModel(
+            process_noise_basis(config.assumed_imu, self.rate_hz), self.weights.Wm, self.weights.Wc
+        )
+        self.settings = KernelSettings(
+            self.dt,
+            float(config.g),
+            float(det.g),
+            np.inf if self.gate_nis is None else self.gate_nis,
+            self.uses_shoe,
+            config.update_mode is UpdateMode.STANCE_BOUNDARIES,
+            STATE_DIM + self.weights.lam,
+            DIVERGENCE_SPEED,
         )
 
     # ------------------------------------------------------------------ init
@@ -434,7 +250,8 @@ class ZuptUkf:
         else:
             self.gyro_bias[idx] = 0.0
         self.set_state(idx, *self.initial_state(euler0))
-        self.detector.reset(None if mask is None else mask)
+        for arr in self.detector_state:
+            arr[idx] = 0
         self.height_ref[idx] = 0.0
         for arr in (self.sample, self.updates, self.rejected, self.repairs, self.stance_starts):
             arr[idx] = 0
@@ -447,8 +264,7 @@ class ZuptUkf:
         idx = np.asarray(idx, dtype=np.int64)
         x = np.ascontiguousarray(x, dtype=float)
         P = np.ascontiguousarray(P, dtype=float)
-        spread = STATE_DIM + self.weights.lam
-        bad = redraw_sigmas(idx, x, P, spread, self.sig_C, self.sig_v, self.sig_p)
+        bad = redraw_sigmas(idx, x, P, self.settings.spread, self._filters(self.counters()))
         self.repairs[idx] += bad
         self.x[idx], self.P[idx] = x, P
         self.elapsed_s[idx] = 0.0
@@ -487,6 +303,51 @@ class ZuptUkf:
         padding after the end of its record). ``record`` = ``"position"`` or
         ``"state"`` also returns the mean after every sample.
         """
+        block = self._block_input(omega_b, f_b, shoe_statistic, valid, record)
+        n, k = self.n, block.omega.shape[1]
+        out = BlockOutput(
+            np.zeros((n, k), dtype=bool),
+            np.zeros((n, k), dtype=bool),
+            np.zeros((n, k), dtype=bool),
+            np.zeros(n, dtype=np.int64),
+            np.zeros(n),
+            np.empty((n, 3)),
+            np.empty(n, dtype=np.int64),
+            np.empty(n, dtype=np.int64),
+            np.empty((n, k, 3) if record is not None else (0, 0, 3)),
+            np.empty((n, k, STATE_DIM) if record == "state" else (0, 0, STATE_DIM)),
+        )
+        rows = n * k if self.record_updates else 0
+        log = UpdateLog(
+            np.zeros((rows, 4), dtype=np.int64),
+            np.empty((rows, 2, STATE_DIM)),
+            np.empty((rows, 2, STATE_DIM, STATE_DIM)),
+            np.empty(rows),
+        )
+        counters = self.counters()
+        filters = self._filters(counters)
+        n_log = advance_block(
+            block, self.settings, self._knobs(), self.model, filters, self.detector_state, out, log
+        )
+        self.updates[:], self.rejected[:], self.repairs[:] = counters.T
+        self.stance_starts += out.start.sum(axis=1)
+        upd = out.last_accepted >= 0
+        self.time_since_update_s = np.where(
+            upd, (k - out.last_accepted) * self.dt, self.time_since_update_s + k * self.dt
+        )
+        self._keep_log(log, n_log)
+        self.sample += k
+        return self._block_result(out, block.valid, record)
+
+    def _block_input(
+        self,
+        omega_b: Array,
+        f_b: Array,
+        shoe_statistic: Array | None,
+        valid: NDArray[np.integer] | None,
+        record: str | None,
+    ) -> BlockInput:
+        """Checked kernel input of :meth:`advance`."""
         n = self.n
         omega_b = np.ascontiguousarray(omega_b, dtype=float)
         f_b = np.ascontiguousarray(f_b, dtype=float)
@@ -508,112 +369,80 @@ class ZuptUkf:
                 raise ValueError(f"shoe_statistic must be ({n}, {k}), got {shoe_cond.shape}")
         else:
             shoe_cond = np.zeros((n, 0), dtype=bool)
-        lane_params = np.empty((n, 6))
-        lane_params[:, 0] = self.omega_max
-        lane_params[:, 1] = self.delta_f_max
-        lane_params[:, 2] = self.process_noise_scale
-        lane_params[:, 3] = self.zupt_noise_base[0, 0] * self.zupt_noise_scale
-        lane_params[:, 4] = self.zupt_noise_base[1, 1] * self.zupt_noise_scale
-        lane_params[:, 5] = self.height_ref
-        stance = np.zeros((n, k), dtype=bool)
-        start = np.zeros((n, k), dtype=bool)
-        end = np.zeros((n, k), dtype=bool)
-        accepted = np.zeros(n, dtype=np.int64)
-        nis_log_sum = np.zeros(n)
-        position = np.empty((n, 3))
-        diverged_at = np.empty(n, dtype=np.int64)
-        last_accepted = np.empty(n, dtype=np.int64)
-        positions = np.empty((n, k, 3) if record is not None else (0, 0, 3))
-        states = np.empty((n, k, STATE_DIM) if record == "state" else (0, 0, STATE_DIM))
-        logs = n * k if self.record_updates else 0
-        log_index = np.zeros((logs, 4), dtype=np.int64)
-        log_x = np.empty((logs, 2, STATE_DIM))
-        log_P = np.empty((logs, 2, STATE_DIM, STATE_DIM))
-        log_nis = np.empty(logs)
-        counters = np.stack((self.updates, self.rejected, self.repairs), axis=1)
-        frozen = self.diverged.copy()
-        n_log = advance_block(
-            omega_b,
-            f_b,
-            shoe_cond,
-            valid,
-            frozen,
-            self._kernel_params,
-            lane_params,
-            self.detector.min_samples(self.min_stance_s),
+        return BlockInput(omega_b, f_b, shoe_cond, valid, self.diverged.copy())
+
+    def _knobs(self) -> WalkerKnobs:
+        """The per-walker settings as the kernel reads them."""
+        return WalkerKnobs(
+            np.asarray(self.omega_max, dtype=float),
+            np.asarray(self.delta_f_max, dtype=float),
+            min_stance_samples(self.min_stance_s, self.rate_hz),
+            np.asarray(self.process_noise_scale, dtype=float),
+            self.zupt_noise_base[0, 0] * self.zupt_noise_scale,
+            self.zupt_noise_base[1, 1] * self.zupt_noise_scale,
+            self.height_ref,
             self.gyro_bias,
-            self.q_basis,
-            self._Wm,
-            self._Wc,
+        )
+
+    def counters(self) -> NDArray[np.int64]:
+        """(N, 3) [updates, rejected, repairs], a copy."""
+        return np.stack((self.updates, self.rejected, self.repairs), axis=1)
+
+    def _filters(self, counters: NDArray[np.int64]) -> WalkerFilters:
+        return WalkerFilters(
             self.sig_C,
             self.sig_v,
             self.sig_p,
             self.x,
             self.P,
             self.elapsed_s,
-            self.detector.history,
-            self.detector.count,
-            self.detector.run,
-            self.detector.in_stance,
             counters,
             self.last_nis,
-            stance,
-            start,
-            end,
-            accepted,
-            nis_log_sum,
-            position,
-            diverged_at,
-            last_accepted,
-            positions,
-            states,
-            log_index,
-            log_x,
-            log_P,
-            log_nis,
         )
-        self.updates[:], self.rejected[:], self.repairs[:] = counters.T
-        self.stance_starts += start.sum(axis=1)
-        upd = last_accepted >= 0
-        self.time_since_update_s = np.where(
-            upd, (k - last_accepted) * self.dt, self.time_since_update_s + k * self.dt
-        )
-        if n_log:
-            kinds = ("start", "end", "stance")
-            for (w, j, kind, ok), xs, Ps, nis in zip(
-                log_index[:n_log], log_x, log_P, log_nis, strict=False
-            ):
-                self.history.append(
-                    UpdateRecord(
-                        int(w),
-                        int(self.sample[w] + j),
-                        kinds[kind],
-                        xs[0].copy(),
-                        Ps[0].copy(),
-                        xs[1].copy(),
-                        Ps[1].copy(),
-                        float(nis),
-                        bool(ok),
-                    )
+
+    def _keep_log(self, log: UpdateLog, n_log: int) -> None:
+        """Append the kernel's logged ZUPTs to :attr:`history`."""
+        for (w, j, kind, ok), xs, Ps, nis in zip(
+            log.index[:n_log], log.x, log.P, log.nis, strict=False
+        ):
+            self.history.append(
+                UpdateRecord(
+                    int(w),
+                    int(self.sample[w] + j),
+                    _KINDS[kind],
+                    xs[0].copy(),
+                    Ps[0].copy(),
+                    xs[1].copy(),
+                    Ps[1].copy(),
+                    float(nis),
+                    bool(ok),
                 )
-        self.sample += k
-        newly = diverged_at <= k
+            )
+
+    def _block_result(
+        self, out: BlockOutput, valid: NDArray[np.int64], record: str | None
+    ) -> BlockResult:
+        """Freeze the walkers that diverged in the block and hold their outputs at
+        the frozen state from the sample of divergence on."""
+        k = out.stance.shape[1]
+        position, positions, states = out.position, out.positions, out.states
+        newly = out.diverged_at <= k
         if newly.any():
             # frozen at the last posterior from the state where they diverged on
             self._freeze(np.flatnonzero(newly))
-            held = newly & (diverged_at <= valid)
+            held = newly & (out.diverged_at <= valid)
             position[held] = self.mean_position()[held]
             if record is not None:
-                hold = np.arange(1, k + 1)[None, :] >= diverged_at[:, None]
+                hold = np.arange(1, k + 1)[None, :] >= out.diverged_at[:, None]
                 positions = np.where(hold[..., None], self.mean_position()[:, None, :], positions)
                 if record == "state":
                     states = np.where(hold[..., None], self.mean_state()[:, None, :], states)
         return BlockResult(
-            stance,
-            start,
-            end,
-            accepted,
-            nis_log_sum,
+            out.stance,
+            out.start,
+            out.end,
+            out.accepted,
+            out.nis_log_sum,
             position,
             positions if record is not None else None,
             states if record == "state" else None,
@@ -635,6 +464,20 @@ class ZuptUkf:
     def mean_position(self) -> Array:
         """Mean IMU position ``(N, 3)`` (m) — cheap: positions are not angles."""
         return np.einsum("s,nsd->nd", self.weights.Wm, self.sig_p)
+
+    def tallies(self) -> ZuptTallies:
+        """Copies of the per-walker counts: updates, rejected, repairs, diverged."""
+        return ZuptTallies(
+            self.updates.copy(), self.rejected.copy(), self.repairs.copy(), self.diverged.copy()
+        )
+
+    def stance_statistic(self, omega_b: Array, f_b: Array) -> Array | None:
+        """The SHOE statistic of records ``(B, T, 3)`` that :meth:`advance` needs when
+        the detector is SHOE (:func:`pednav_env.nav.detectors.shoe_statistic`), or
+        None for eq (5), which the kernel evaluates itself."""
+        if not self.uses_shoe:
+            return None
+        return shoe_statistic(omega_b, f_b, self.config.detector, self.rate_hz)
 
     # ------------------------------------------------------------------ whole records
     def run(
@@ -659,11 +502,7 @@ class ZuptUkf:
             raise ValueError(f"record of {t} samples is shorter than the alignment window")
         self.initialize(f_b[:, :n_align], omega_align_b=omega_b[:, :n_align])
         self.sample[:] = n_align
-        shoe = None
-        if self.uses_shoe:
-            from pednav_env.nav.detectors import shoe_statistic
-
-            shoe = shoe_statistic(omega_b, f_b, self.config.detector, self.rate_hz)
+        shoe = self.stance_statistic(omega_b, f_b)
         xs = np.empty((self.n, t + 1, STATE_DIM)) if record else np.empty((0,))
         stance = np.zeros((self.n, t), dtype=bool)
         if record:
@@ -681,13 +520,4 @@ class ZuptUkf:
             stance[:, m0:m1] = res.stance
             if record:
                 xs[:, m0 + 1 : m1 + 1] = res.states
-        return ZuptRun(
-            xs,
-            n_align,
-            stance,
-            self.updates.copy(),
-            self.rejected.copy(),
-            self.repairs.copy(),
-            self.diverged.copy(),
-            self.P.copy(),
-        )
+        return ZuptRun(xs, n_align, stance, *self.tallies(), self.P.copy())

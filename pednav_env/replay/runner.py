@@ -33,14 +33,14 @@ from pednav_env.io.footprints import Footprints
 from pednav_env.io.recording import Recording
 from pednav_env.io.uniform import UniformSamples, to_uniform
 from pednav_env.nav.mounting import mounting_rotation, rotate_samples
-from pednav_env.nav.zupt_ukf import (
+from pednav_env.nav.zupt_model import (
     STATE_DIM,
-    ZuptUkf,
     dcm_to_state,
     process_noise,
     state_mean,
     state_residual,
 )
+from pednav_env.nav.zupt_ukf import ZuptUkf
 from pednav_env.replay.setup import RealFilterSetup
 from pednav_env.replay.start import find_still_start
 
@@ -206,11 +206,8 @@ def run_prepared(
         cov = np.empty((n, m, STATE_DIM))
         states[:, :na] = e.mean_state()[:, None]
         cov[:, :na] = np.diagonal(e.P, axis1=1, axis2=2)[:, None]
-    shoe = None
-    if e.uses_shoe:
-        from pednav_env.nav.detectors import shoe_statistic
-
-        shoe = shoe_statistic(w[:1], f[:1], prep.setup.filter.detector, prep.rate_hz)
+    shoe = e.stance_statistic(w[:1], f[:1])  # the lanes share the recording
+    if shoe is not None:
         shoe = np.broadcast_to(shoe, (n, m))
     k = max(1, int(round(interval_s * prep.rate_hz)))
     for interval, s0 in enumerate(range(na, m, k)):
@@ -241,18 +238,7 @@ def run_prepared(
             cov[:, j] = state_covariance(e, diagonal=True)
             stance[:, j] = res.stance[:, 0]
         pos[:, s0:s1] = states[:, s0:s1, :3]
-    return RecordingRun(
-        prep,
-        pos,
-        stance,
-        e.stance_starts.copy(),
-        e.updates.copy(),
-        e.rejected.copy(),
-        e.repairs.copy(),
-        e.diverged.copy(),
-        states,
-        cov,
-    )
+    return RecordingRun(prep, pos, stance, e.stance_starts.copy(), *e.tallies(), states, cov)
 
 
 def state_covariance(e: ZuptUkf, diagonal: bool = False) -> Array:
@@ -264,11 +250,11 @@ def state_covariance(e: ZuptUkf, diagonal: bool = False) -> Array:
     d = state_residual(sig, state_mean(sig, e.weights.Wm)[:, None])
     if diagonal:
         tau = e.elapsed_s[:, None] ** np.arange(1, 5) * e.process_noise_scale[:, None]
-        q = tau @ np.diagonal(e.q_basis, axis1=1, axis2=2)
+        q = tau @ np.diagonal(e.model.q_basis, axis1=1, axis2=2)
         return np.einsum("s,nsi->ni", e.weights.Wc, d * d) + q
     spread = np.einsum("s,nsi,nsj->nij", e.weights.Wc, d, d)
     q = process_noise(
-        e.config.assumed_imu, e.rate_hz, e.elapsed_s, e.process_noise_scale, e.q_basis
+        e.config.assumed_imu, e.rate_hz, e.elapsed_s, e.process_noise_scale, e.model.q_basis
     )
     return spread + q
 

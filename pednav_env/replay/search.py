@@ -34,7 +34,7 @@ import numpy as np
 
 from pednav_env.io.recording import Recording
 from pednav_env.nav.detectors import ShoeDetectorConfig, ThresholdDetectorConfig
-from pednav_env.nav.zupt_ukf import UpdateMode, ZuptUkfConfig
+from pednav_env.nav.zupt_config import UpdateMode, ZuptUkfConfig
 from pednav_env.replay.metrics import track_errors
 from pednav_env.replay.runner import prepare, run_prepared
 from pednav_env.replay.setup import RealFilterSetup

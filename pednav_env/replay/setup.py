@@ -1,7 +1,7 @@
 """How the ZUPT-UKF is set up for a recording, and the shipped configurations.
 
 A :class:`RealFilterSetup` is the filter configuration (detector, noise
-scales, update mode — :class:`pednav_env.nav.zupt_ukf.ZuptUkfConfig`) plus
+scales, update mode — :class:`pednav_env.nav.zupt_config.ZuptUkfConfig`) plus
 what real data need besides: the mounting rotation, the gravity magnitude,
 and the bounds of the still window used for alignment.
 
@@ -26,7 +26,7 @@ from typing import Any
 
 from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.nav.detectors import ShoeDetectorConfig, ThresholdDetectorConfig
-from pednav_env.nav.zupt_ukf import UpdateMode, ZuptUkfConfig
+from pednav_env.nav.zupt_config import UpdateMode, ZuptUkfConfig
 
 SETUP_NAMES = ("paper", "real-fixed")
 REAL_FIXED_FILE = Path(__file__).with_name("real_fixed.json")

@@ -18,11 +18,9 @@ from numpy.typing import NDArray
 
 from pednav_env.envs.foot_core import FootZuptConfig, generate_episode
 from pednav_env.nav.alignment import align_static
-from pednav_env.nav.detectors import OnlineStanceDetector
-from pednav_env.nav.zupt_ukf import (
+from pednav_env.nav.zupt_config import ZuptUkfConfig
+from pednav_env.nav.zupt_model import (
     STATE_DIM,
-    ZuptUkf,
-    ZuptUkfConfig,
     measure,
     process_noise,
     propagate_state,
@@ -31,7 +29,9 @@ from pednav_env.nav.zupt_ukf import (
     state_residual,
     state_to_nav,
 )
+from pednav_env.nav.zupt_ukf import ZuptUkf
 from pednav_env.rotations import quat_rotate
+from pednav_env.testing.detectors import OnlineStanceDetector
 
 
 def filterpy_zupt_ukf(

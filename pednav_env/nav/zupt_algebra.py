@@ -1,0 +1,264 @@
+"""Compiled unscented algebra of one walker of the ZUPT-UKF (paper 003).
+
+Paper 003's UKF section (after Wan & van der Merwe 2000) for the state
+y = [x₁, x₂, x₃, v₁, v₂, v₃, θ, γ, ψ] (L = 9), step for step as
+``filterpy.kalman.UnscentedKalmanFilter`` 2.0 computes it (the oracle of the
+tests; :mod:`pednav_env.nav.ukf` gives the weights):
+
+- :func:`draw_sigmas`: χ₀ = x̂, χ_k = x̂ + √((L+λ)P)_k, χ_{L+k} = x̂ − √((L+λ)P)_k
+  with the lower Cholesky factor's columns, angles wrapped;
+- :func:`prior_moments`: the unscented mean and covariance of the propagated
+  points plus Q, angles averaged and differenced with wrapping;
+- :func:`zupt_update`: the update with the ZUPT pseudo-measurement
+  h(y) = [x₃, v₁, v₂, v₃], z = [x₃(t₀), 0, 0, 0].
+
+Scalar loops over one walker's arrays, called from
+:func:`pednav_env.nav.zupt_kernel.advance_block`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from pednav_env.nav.ukf import floored_covariance
+from pednav_env.rotations import euler_dcm_rows, wrap_angle
+
+_wrap = njit(cache=True)(wrap_angle)
+_euler_dcm_rows = njit(cache=True)(euler_dcm_rows)
+
+#: Index of the first angle (θ) in the state; angles are 6, 7, 8.
+FIRST_ANGLE = 6
+
+
+@njit(cache=True)
+def state_mean(chi: np.ndarray, Wm: np.ndarray, out: np.ndarray) -> None:
+    """Weighted mean of states ``chi`` (S, 9) with angles averaged as wrapped
+    deviations from the central point (filterpy's ``x_mean_fn``; the numpy twin is
+    :func:`pednav_env.nav.zupt_model.state_mean`)."""
+    for d in range(9):
+        acc = 0.0
+        for s in range(chi.shape[0]):
+            dev = chi[s, d] - chi[0, d]
+            acc += Wm[s] * (_wrap(dev) if d >= FIRST_ANGLE else dev)
+        out[d] = _wrap(chi[0, d] + acc) if d >= FIRST_ANGLE else chi[0, d] + acc
+
+
+@njit(cache=True)
+def prior_moments(
+    chi: np.ndarray,
+    Wm: np.ndarray,
+    Wc: np.ndarray,
+    basis: np.ndarray,
+    powers: np.ndarray,
+    dev: np.ndarray,
+    x: np.ndarray,
+    P: np.ndarray,
+) -> None:
+    """Unscented mean ``x`` (9,) and covariance ``P`` (9, 9) of sigma states ``chi``
+    (S, 9) plus Q = Σ_p powers_p basis_p (:func:`pednav_env.nav.zupt_model.process_noise`):
+    filterpy's ``unscented_transform`` with the wrapped-angle mean and residual,
+    the residuals from the central point computed once (scratch ``dev`` (S, 9))."""
+    ns = chi.shape[0]
+    for d in range(9):
+        acc = 0.0
+        for s in range(ns):
+            v = chi[s, d] - chi[0, d]
+            if d >= FIRST_ANGLE:
+                v = _wrap(v)
+            dev[s, d] = v
+            acc += Wm[s] * v
+        x[d] = _wrap(chi[0, d] + acc) if d >= FIRST_ANGLE else chi[0, d] + acc
+        for s in range(ns):
+            v = dev[s, d] - acc
+            dev[s, d] = _wrap(v) if d >= FIRST_ANGLE else v
+    for r in range(9):
+        for c in range(r, 9):
+            acc = 0.0
+            for s in range(ns):
+                acc += Wc[s] * dev[s, r] * dev[s, c]
+            for p in range(powers.shape[0]):
+                acc += powers[p] * basis[p, r, c]
+            P[r, c] = acc
+            P[c, r] = acc
+
+
+@njit(cache=True)
+def inverse4(S: np.ndarray, out: np.ndarray) -> None:
+    """Inverse of a 4 × 4 matrix by Gauss–Jordan elimination with partial pivoting
+    (NaN for a singular matrix, never an exception)."""
+    a = np.empty((4, 8))
+    for r in range(4):
+        for c in range(4):
+            a[r, c] = S[r, c]
+            a[r, 4 + c] = 1.0 if r == c else 0.0
+    for c in range(4):
+        piv = c
+        for r in range(c + 1, 4):
+            if abs(a[r, c]) > abs(a[piv, c]):
+                piv = r
+        if piv != c:
+            for k in range(8):
+                a[c, k], a[piv, k] = a[piv, k], a[c, k]
+        inv_p = 1.0 / a[c, c]
+        for k in range(8):
+            a[c, k] *= inv_p
+        for r in range(4):
+            if r != c:
+                m = a[r, c]
+                for k in range(8):
+                    a[r, k] -= m * a[c, k]
+    for r in range(4):
+        for c in range(4):
+            out[r, c] = a[r, 4 + c]
+
+
+@njit(cache=True)
+def zupt_update(
+    x: np.ndarray,
+    P: np.ndarray,
+    height_ref: float,
+    R_diag: np.ndarray,
+    gate_nis: float,
+    SI: np.ndarray,
+    KT: np.ndarray,
+) -> tuple[float, bool]:
+    """The UKF update with the linear h(y) = [x₃, v₁, v₂, v₃], z = [x₃(t₀), 0, 0, 0]
+    (m, m/s; ``height_ref`` = x₃(t₀)) and R = diag(``R_diag``) on the prior (x, P),
+    in place; ``SI`` (4, 4) and ``KT`` (4, 9) are scratch.
+
+    Sigma points drawn from (x⁻, P⁻) through a linear h give exactly ẑ = h(x⁻),
+    S = H P⁻ Hᵀ + R, P_xz = P⁻ Hᵀ, so this is filterpy 2.0's update on redrawn
+    prior sigma points, without drawing them: Kᵀ = S⁻¹ P_xzᵀ, x ← x + K y
+    (angles wrapped), P ← sym(P − P_xz Kᵀ). Returns (NIS, accepted by the χ²
+    gate ``gate_nis``; inf accepts all)."""
+    S = np.empty((4, 4))
+    for r in range(4):
+        for c in range(4):
+            S[r, c] = P[2 + r, 2 + c]
+        S[r, r] += R_diag[r]
+    inverse4(S, SI)
+    y = np.empty(4)
+    y[0] = height_ref - x[2]
+    for r in range(1, 4):
+        y[r] = -x[2 + r]
+    nis = 0.0
+    for r in range(4):
+        acc = 0.0
+        for c in range(4):
+            acc += SI[r, c] * y[c]
+        nis += acc * y[r]
+    for r in range(4):
+        for c in range(9):
+            acc = 0.0
+            for m in range(4):
+                acc += SI[r, m] * P[c, 2 + m]
+            KT[r, c] = acc
+    accepted = nis <= gate_nis
+    if accepted:
+        for c in range(9):
+            acc = 0.0
+            for r in range(4):
+                acc += y[r] * KT[r, c]
+            x[c] += acc
+        _subtract_gain(P, KT)
+    for d in range(FIRST_ANGLE, 9):
+        x[d] = _wrap(x[d])
+    for r in range(9):
+        for c in range(r + 1, 9):
+            m = 0.5 * (P[r, c] + P[c, r])
+            P[r, c] = m
+            P[c, r] = m
+    return nis, accepted
+
+
+@njit(cache=True)
+def _subtract_gain(P: np.ndarray, KT: np.ndarray) -> None:
+    """P ← P − P_xz Kᵀ with P_xz = P[:, 2:6] read before any entry changes."""
+    Pxz = np.empty((9, 4))
+    for r in range(9):
+        for m in range(4):
+            Pxz[r, m] = P[r, 2 + m]
+    for r in range(9):
+        for c in range(9):
+            acc = 0.0
+            for m in range(4):
+                acc += Pxz[r, m] * KT[m, c]
+            P[r, c] -= acc
+
+
+@njit(cache=True)
+def cholesky_lower(A: np.ndarray, L: np.ndarray) -> bool:
+    """Lower Cholesky factor of a symmetric matrix into ``L``; False when it is not
+    positive definite (a pivot ≤ 0 or not finite)."""
+    n = A.shape[0]
+    for j in range(n):
+        acc = A[j, j]
+        for k in range(j):
+            acc -= L[j, k] * L[j, k]
+        if not (acc > 0.0) or not math.isfinite(acc):
+            return False
+        d = math.sqrt(acc)
+        L[j, j] = d
+        for i in range(j + 1, n):
+            acc = A[i, j]
+            for k in range(j):
+                acc -= L[i, k] * L[j, k]
+            L[i, j] = acc / d
+        for i in range(j):
+            L[i, j] = 0.0
+    return True
+
+
+@njit(cache=True)
+def draw_sigmas(
+    x: np.ndarray,
+    P: np.ndarray,
+    spread: float,
+    C: np.ndarray,
+    v: np.ndarray,
+    p: np.ndarray,
+    L: np.ndarray,
+) -> bool:
+    """Sigma points of (x, P) with ``spread`` = L + λ, written as attitude matrices
+    ``C`` (S, 3, 3), velocities ``v`` and positions ``p`` (S, 3) (module docstring;
+    filterpy's ``MerweScaledSigmaPoints``, whose upper factor's rows are the lower
+    factor's columns; ``L`` (9, 9) scratch). Returns True when (L + λ)P had no
+    Cholesky factor and was repaired first
+    (:func:`pednav_env.nav.ukf.floored_covariance`)."""
+    n = 9
+    A = np.empty((n, n))
+    for r in range(n):
+        for c in range(n):
+            A[r, c] = spread * P[r, c]
+    repaired = False
+    if not cholesky_lower(A, L):
+        repaired = True
+        floored = np.empty((n, n))
+        floored_covariance(A, floored)
+        cholesky_lower(floored, L)
+    chi = np.empty(n)
+    for s in range(2 * n + 1):
+        sign = 0.0 if s == 0 else (1.0 if s <= n else -1.0)
+        k = (s - 1) % n
+        for d in range(n):
+            val = x[d] + sign * L[d, k] if s > 0 else x[d]
+            chi[d] = _wrap(val) if d >= FIRST_ANGLE else val
+        for r in range(3):
+            p[s, r] = chi[r]
+            v[s, r] = chi[3 + r]
+        yaw, pitch, roll = chi[8], chi[6], chi[7]
+        rows = _euler_dcm_rows(
+            math.cos(yaw),
+            math.sin(yaw),
+            math.cos(pitch),
+            math.sin(pitch),
+            math.cos(roll),
+            math.sin(roll),
+        )
+        for r in range(3):
+            for c in range(3):
+                C[s, r, c] = rows[r][c]
+    return repaired
