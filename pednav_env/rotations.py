@@ -10,7 +10,7 @@ navigation frame, scalar first, Hamilton product. Euler angles are paper
 With y pointing left, positive pitch θ turns the nose (toes) down, which is
 why paper 003's alignment reads f₁ = −g sin θ (its eq 4).
 
-:func:`wrap_angle`, :func:`euler_dcm_rows` and :func:`dcm_euler_angles` use
+:func:`wrap_float`, :func:`euler_dcm_rows` and :func:`dcm_euler_angles` use
 only arithmetic and numpy ufuncs, so numba compiles the very same functions
 for the scalar code of the ZUPT kernel (:mod:`pednav_env.nav.zupt_kernel`):
 one implementation, the same results bit for bit.
@@ -25,13 +25,14 @@ Array = NDArray[np.float64]
 
 
 def wrap_angle(angle: ArrayLike) -> Array:
-    """Wrap angles (rad) into [−π, π).
+    """Wrap angles (rad) into [−π, π): :func:`wrap_float` of the input as float64."""
+    return wrap_float(np.asarray(angle, dtype=float))
 
-    Plain numpy on scalars and arrays, and written so that numba compiles the
-    same function for float scalars (the ZUPT kernel calls it that way).
-    """
-    a = np.asarray(angle, dtype=np.float64)
-    # a − 2π ⌊(a + π)/2π⌋: the same as (a + π) mod 2π − π, several times faster than fmod
+
+def wrap_float(a: Array) -> Array:
+    """Wrap float64 angles (rad, a scalar or an array) into [−π, π), no conversion:
+    a − 2π ⌊(a + π)/2π⌋ (the same as (a + π) mod 2π − π, several times faster than
+    fmod). Numba compiles this function for the ZUPT kernel's scalars."""
     return a - (2.0 * np.pi) * np.floor((a + np.pi) * (0.5 / np.pi))
 
 

@@ -51,7 +51,7 @@ def restart(pre: Preintegral) -> None:
     pre.B[:] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rotvec_quat(kx: float, ky: float, kz: float) -> tuple[float, float, float, float]:
     """Δq = [cos(|k|/2), k/|k| sin(|k|/2)] (paper 003 eq 3; series below 1e-6 rad),
     as :func:`pednav_env.rotations.quat_from_rotvec`."""
@@ -61,7 +61,7 @@ def _rotvec_quat(kx: float, ky: float, kz: float) -> tuple[float, float, float, 
     return math.cos(half), kx * s, ky * s, kz * s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def strapdown_increment(
     w: np.ndarray, f: np.ndarray, dt: float, dC: np.ndarray, f_mid: np.ndarray
 ) -> None:
@@ -88,14 +88,14 @@ def strapdown_increment(
     f_mid[2] = vz + hw * tz + hx * ty - hy * tx
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def anchor_force(D: np.ndarray, f_mid: np.ndarray, F: np.ndarray) -> None:
     """``F`` ← D f_mid: the sample's specific force in the anchor's body axes."""
     for r in range(3):
         F[r] = D[r, 0] * f_mid[0] + D[r, 1] * f_mid[1] + D[r, 2] * f_mid[2]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def accumulate(pre: Preintegral, F: np.ndarray, dC: np.ndarray, dt: float) -> None:
     """One sample of the preintegrals: A ← A + F Δt, B ← B + ½(A_old + A) Δt,
     D ← D C(Δq), with F = D f_mid (:func:`anchor_force`)."""
@@ -161,7 +161,7 @@ def move_sigmas(
         v[s, 2] -= g * tau
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def central_point_diverges(
     C: np.ndarray,
     v: np.ndarray,
@@ -186,7 +186,7 @@ def central_point_diverges(
     return diverging(C[0], v_out, p_out, speed_max)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def diverging(C: np.ndarray, v: np.ndarray, p: np.ndarray, speed_max: float) -> bool:
     """Non-finite attitude ``C`` (3, 3), velocity or position, or a speed above
     ``speed_max`` (m/s)."""
@@ -238,11 +238,15 @@ def weighted_sums(
 
 
 @njit(cache=True)
-def mean_position(sums: AnchorSums, pre: Preintegral, tau: float, g: float, r: int) -> float:
-    """Coordinate ``r`` of the mean position (m) of the sigma points moved over τ (s)."""
+def mean_position(
+    sums: AnchorSums, pre: Preintegral, tau: float, g: float, out: np.ndarray
+) -> None:
+    """``out`` (3,) ← the mean position (m) of the sigma points moved over τ (s),
+    from the anchor's weighted sums (:func:`weighted_sums`)."""
     Cbar, B = sums.C, pre.B
-    mp = sums.p[r] + sums.v[r] * tau
-    mp += Cbar[r, 0] * B[0] + Cbar[r, 1] * B[1] + Cbar[r, 2] * B[2]
-    if r == 2:
-        mp -= 0.5 * g * (tau * tau)
-    return mp
+    for r in range(3):
+        mp = sums.p[r] + sums.v[r] * tau
+        mp += Cbar[r, 0] * B[0] + Cbar[r, 1] * B[1] + Cbar[r, 2] * B[2]
+        if r == 2:
+            mp -= 0.5 * g * (tau * tau)
+        out[r] = mp

@@ -24,9 +24,9 @@ import numpy as np
 from numba import njit
 
 from pednav_env.nav.ukf import floored_covariance
-from pednav_env.rotations import euler_dcm_rows, wrap_angle
+from pednav_env.rotations import euler_dcm_rows, wrap_float
 
-_wrap = njit(cache=True)(wrap_angle)
+_wrap = njit(cache=True)(wrap_float)
 _euler_dcm_rows = njit(cache=True)(euler_dcm_rows)
 
 #: Index of the first angle (θ) in the state; angles are 6, 7, 8.

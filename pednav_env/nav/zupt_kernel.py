@@ -166,40 +166,55 @@ class UpdateLog(NamedTuple):
     nis: np.ndarray  # (M,)
 
 
-class Workspace(NamedTuple):
-    """Scratch arrays of one walker, reused across walkers."""
+class SampleScratch(NamedTuple):
+    """Scratch arrays of the per-sample steps, reused across walkers."""
 
-    w: np.ndarray  # (3,) bias-corrected rate
+    w: np.ndarray  # (3,) rad/s, bias-corrected rate
     dC: np.ndarray  # (3, 3) C(Δq) of the sample
-    f_mid: np.ndarray  # (3,) specific force in mid-interval axes
-    F: np.ndarray  # (3,) the same in anchor axes
+    f_mid: np.ndarray  # (3,) m/s², specific force in mid-interval axes
+    F: np.ndarray  # (3,) m/s², the same in anchor axes
     pre: Preintegral
     sums: AnchorSums
-    chi: np.ndarray  # (S, 9) moved sigma states
-    C_moved: np.ndarray  # (S, 3, 3) their attitudes
-    dev: np.ndarray  # (S, 9) residuals
-    x: np.ndarray  # (9,) prior / posterior mean
-    P: np.ndarray  # (9, 9) prior / posterior covariance
-    SI: np.ndarray  # (4, 4) S⁻¹
-    KT: np.ndarray  # (4, 9) Kᵀ
-    L: np.ndarray  # (9, 9) Cholesky factor
-    powers: np.ndarray  # (4,) τᵖ · process-noise scale
-    R_diag: np.ndarray  # (4,)
-    v_c: np.ndarray  # (3,) central point's velocity
-    p_c: np.ndarray  # (3,) central point's position
-    mean: np.ndarray  # (9,) mean state
+    v_c: np.ndarray  # (3,) m/s, central point's velocity
+    p_c: np.ndarray  # (3,) m, central point's position
+    p_mean: np.ndarray  # (3,) m, mean position
 
 
 @njit(cache=True)
-def new_workspace(num_sigmas: int, num_powers: int) -> Workspace:
-    """Scratch arrays for :func:`advance_block`."""
-    return Workspace(
+def new_sample_scratch() -> SampleScratch:
+    """Scratch arrays for the per-sample steps of :func:`advance_walker`."""
+    return SampleScratch(
         np.empty(3),
         np.empty((3, 3)),
         np.empty(3),
         np.empty(3),
         Preintegral(np.empty((3, 3)), np.empty(3), np.empty(3)),
         AnchorSums(np.empty((3, 3)), np.empty(3), np.empty(3)),
+        np.empty(3),
+        np.empty(3),
+        np.empty(3),
+    )
+
+
+class ZuptScratch(NamedTuple):
+    """Scratch arrays of a ZUPT (and of a recorded mean state)."""
+
+    chi: np.ndarray  # (S, 9) moved sigma states
+    C_moved: np.ndarray  # (S, 3, 3) their attitudes
+    dev: np.ndarray  # (S, 9) residuals from the mean
+    x: np.ndarray  # (9,) prior, then posterior mean
+    P: np.ndarray  # (9, 9) prior, then posterior covariance
+    SI: np.ndarray  # (4, 4) S⁻¹
+    KT: np.ndarray  # (4, 9) Kᵀ
+    L: np.ndarray  # (9, 9) Cholesky factor
+    powers: np.ndarray  # (4,) τᵖ · process-noise scale
+    R_diag: np.ndarray  # (4,)
+
+
+@njit(cache=True)
+def new_zupt_scratch(num_sigmas: int, num_powers: int) -> ZuptScratch:
+    """Scratch arrays for :func:`zupt`, reused across walkers."""
+    return ZuptScratch(
         np.empty((num_sigmas, 9)),
         np.empty((num_sigmas, 3, 3)),
         np.empty((num_sigmas, 9)),
@@ -210,14 +225,11 @@ def new_workspace(num_sigmas: int, num_powers: int) -> Workspace:
         np.zeros((9, 9)),
         np.empty(num_powers),
         np.empty(4),
-        np.empty(3),
-        np.empty(3),
-        np.empty(9),
     )
 
 
 # ------------------------------------------------------------------ detector
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def eq5_condition(
     w: np.ndarray,
     f_n3: float,
@@ -254,33 +266,31 @@ def eq5_condition(
     return (om <= omega_max) and (abs(fm - g) <= delta_f_max), count
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def detect(
-    i: int,
+    shoe_condition: np.ndarray,
     j: int,
-    block: BlockInput,
-    s: KernelSettings,
-    knobs: WalkerKnobs,
+    w: np.ndarray,
+    F: np.ndarray,
+    C_central: np.ndarray,
     history: np.ndarray,
     count: int,
-    C_central: np.ndarray,
-    ws: Workspace,
+    omega_max: float,
+    delta_f_max: float,
+    g: float,
 ) -> tuple[bool, int]:
-    """Stance condition of walker i at sample j: the SHOE condition of the block, or
-    eq (5) with f'_x3 = e₃ᵀ C_c D f_mid through the central sigma point's attitude
-    ``C_central`` at the anchor (its attitude now is C_c D). Returns (condition,
-    samples seen)."""
-    window = history.shape[0] + 1
-    if s.uses_shoe:
-        return block.shoe_cond[i, j], min(count + 1, window)
-    F = ws.F
+    """Stance condition at sample j: the SHOE condition ``shoe_condition[j]`` when
+    the walker's row (K,) is given (empty for eq 5), else eq (5)
+    (:func:`eq5_condition`) with f'_x3 = e₃ᵀ C_c F, F = D f_mid, through the
+    central sigma point's anchor attitude ``C_central`` (its attitude now is
+    C_c D). Returns (condition, samples seen)."""
+    if shoe_condition.shape[0] > 0:
+        return shoe_condition[j], min(count + 1, history.shape[0] + 1)
     f_n3 = C_central[2, 0] * F[0] + C_central[2, 1] * F[1] + C_central[2, 2] * F[2]
-    return eq5_condition(
-        ws.w, f_n3, history, count, knobs.omega_max[i], knobs.delta_f_max[i], s.detector_g
-    )
+    return eq5_condition(w, f_n3, history, count, omega_max, delta_f_max, g)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def stance_logic(
     condition: bool, run: int, in_stance: bool, min_run: int
 ) -> tuple[int, bool, bool, bool]:
@@ -304,84 +314,70 @@ def zupt(
     filt: WalkerFilters,
     log: UpdateLog,
     n_log: int,
-    ws: Workspace,
+    zs: ZuptScratch,
 ) -> tuple[bool, float, int]:
-    """ZUPT of walker i at sample j on the moved sigma states ``ws.chi``: prior
+    """ZUPT of walker i at sample j on the moved sigma states ``zs.chi``: prior
     (unscented moments plus Q of the ``interval_s`` since the last draw), update,
     new sigma points; counters, last posterior and (when logging) the log row
     ``n_log`` are written. Returns (accepted, NIS, next log row)."""
     q_scale = knobs.process_noise_scale[i]
     pw = interval_s
-    for p in range(ws.powers.shape[0]):
-        ws.powers[p] = pw * q_scale
+    for p in range(zs.powers.shape[0]):
+        zs.powers[p] = pw * q_scale
         pw *= interval_s
-    prior_moments(ws.chi, model.Wm, model.Wc, model.q_basis, ws.powers, ws.dev, ws.x, ws.P)
+    prior_moments(zs.chi, model.Wm, model.Wc, model.q_basis, zs.powers, zs.dev, zs.x, zs.P)
     logging = log.index.shape[0] > 0
     if logging:
-        log.x[n_log, 0] = ws.x
-        log.P[n_log, 0] = ws.P
-    ws.R_diag[0] = knobs.zupt_var_height[i]
-    ws.R_diag[1] = ws.R_diag[2] = ws.R_diag[3] = knobs.zupt_var_velocity[i]
-    nis, ok = zupt_update(ws.x, ws.P, knobs.height_ref[i], ws.R_diag, s.gate_nis, ws.SI, ws.KT)
+        log.x[n_log, 0] = zs.x
+        log.P[n_log, 0] = zs.P
+    zs.R_diag[0] = knobs.zupt_var_height[i]
+    zs.R_diag[1] = zs.R_diag[2] = zs.R_diag[3] = knobs.zupt_var_velocity[i]
+    nis, ok = zupt_update(zs.x, zs.P, knobs.height_ref[i], zs.R_diag, s.gate_nis, zs.SI, zs.KT)
     filt.counters[i, 0 if ok else 1] += 1
     filt.last_nis[i] = nis
-    filt.x[i] = ws.x
-    filt.P[i] = ws.P
-    if draw_sigmas(ws.x, ws.P, s.spread, filt.sig_C[i], filt.sig_v[i], filt.sig_p[i], ws.L):
+    filt.x[i] = zs.x
+    filt.P[i] = zs.P
+    if draw_sigmas(zs.x, zs.P, s.spread, filt.sig_C[i], filt.sig_v[i], filt.sig_p[i], zs.L):
         filt.counters[i, 2] += 1
     if logging:
         log.index[n_log, 0] = i
         log.index[n_log, 1] = j
         log.index[n_log, 2] = kind
         log.index[n_log, 3] = 1 if ok else 0
-        log.x[n_log, 1] = ws.x
-        log.P[n_log, 1] = ws.P
+        log.x[n_log, 1] = zs.x
+        log.P[n_log, 1] = zs.P
         log.nis[n_log] = nis
         n_log += 1
     return ok, nis, n_log
 
 
 @njit(cache=True)
-def new_anchor(i: int, model: UkfModel, filt: WalkerFilters, ws: Workspace) -> bool:
-    """Preintegrals restarted at walker i's current sigma points; their weighted
-    sums taken. Returns whether the central attitude is non-finite."""
-    restart(ws.pre)
-    sC = filt.sig_C[i]
-    weighted_sums(model.Wm, sC, filt.sig_v[i], filt.sig_p[i], ws.sums)
-    return not all_finite(sC[0])
+def new_anchor(
+    Wm: np.ndarray, C: np.ndarray, v: np.ndarray, p: np.ndarray, pre: Preintegral, sums: AnchorSums
+) -> bool:
+    """Preintegrals restarted at the sigma points (C, v, p) and their weighted sums
+    taken. Returns whether the central attitude is non-finite."""
+    restart(pre)
+    weighted_sums(Wm, C, v, p, sums)
+    return not all_finite(C[0])
 
 
 # ------------------------------------------------------------------ records
 @njit(cache=True)
-def record_sample(
-    i: int,
-    j: int,
+def mean_state_after(
+    C: np.ndarray,
+    v: np.ndarray,
+    p: np.ndarray,
+    pre: Preintegral,
     tau: float,
-    s: KernelSettings,
-    block: BlockInput,
-    model: UkfModel,
-    filt: WalkerFilters,
-    out: BlockOutput,
-    ws: Workspace,
+    g: float,
+    Wm: np.ndarray,
+    zs: ZuptScratch,
+    out: np.ndarray,
 ) -> None:
-    """After sample j (state index t = j + 1, τ since the anchor): the mean
-    position for ``positions`` and, at the walker's last valid sample,
-    ``position``; the mean state for ``states`` when recorded."""
-    t = j + 1
-    record_pos = out.positions.shape[0] > 0
-    if record_pos or t == block.valid[i]:
-        for r in range(3):
-            mp = mean_position(ws.sums, ws.pre, tau, s.g, r)
-            if record_pos:
-                out.positions[i, j, r] = mp
-            if t == block.valid[i]:
-                out.position[i, r] = mp
-    if out.states.shape[0] > 0:
-        moved_states(
-            filt.sig_C[i], filt.sig_v[i], filt.sig_p[i], ws.pre, tau, s.g, ws.chi, ws.C_moved
-        )
-        state_mean(ws.chi, model.Wm, ws.mean)
-        out.states[i, j] = ws.mean
+    """``out`` (9,) ← the mean state of the sigma points (C, v, p) moved over τ (s)."""
+    moved_states(C, v, p, pre, tau, g, zs.chi, zs.C_moved)
+    state_mean(zs.chi, Wm, out)
 
 
 # ------------------------------------------------------------------ walker and block
@@ -397,66 +393,87 @@ def advance_walker(
     out: BlockOutput,
     log: UpdateLog,
     n_log: int,
-    ws: Workspace,
+    ss: SampleScratch,
+    zs: ZuptScratch,
 ) -> int:
     """Walker i through the block (module docstring). Returns the next log row."""
-    k = block.omega.shape[1]
-    dt, g = s.dt, s.g
+    # Walker i's arrays are taken out of the tuples once: the per-sample loop
+    # calls helpers with arrays and scalars only (a call per sample with whole
+    # tuples, hundreds of machine arguments, costs more than the sample's
+    # arithmetic).
+    k, dt, g = block.omega.shape[1], s.dt, s.g
+    omega, f, bias, valid = block.omega[i], block.f[i], knobs.gyro_bias[i], block.valid[i]
+    shoe_condition = block.shoe_cond[i]
     moving = not block.frozen[i]
-    sC, sv, sp = filt.sig_C[i], filt.sig_v[i], filt.sig_p[i]
+    sC, sv, sp, Wm = filt.sig_C[i], filt.sig_v[i], filt.sig_p[i], model.Wm
+    C_central, history, min_run = sC[0], det.history[i], knobs.min_stance_samples[i]
+    omega_max, delta_f_max = knobs.omega_max[i], knobs.delta_f_max[i]
+    stance, start, end = out.stance[i], out.start[i], out.end[i]
+    positions, states = out.positions, out.states
+    record_pos, record_state = positions.shape[0] > 0, states.shape[0] > 0
+    w, dC, f_mid, F, pre, sums = ss.w, ss.dC, ss.f_mid, ss.F, ss.pre, ss.sums
+    v_c, p_c, p_mean = ss.v_c, ss.p_c, ss.p_mean
     count, run, in_stance = det.count[i], det.run[i], det.in_stance[i]
     anchor = 0  # sample of the last sigma-point draw
-    elapsed0 = filt.elapsed_s[i]  # s from that draw's predecessor to sample 0
+    elapsed0 = filt.elapsed_s[i]  # s from the draw before the block to sample 0
     first_bad = k + 1  # first state index whose central point diverged (after the last ZUPT)
     div_at = k + 1  # state index of divergence (at a ZUPT's prior, or first_bad)
     last_acc, n_acc, nis_sum = -1, 0, 0.0
-    anchor_bad = new_anchor(i, model, filt, ws)
-    if block.valid[i] == 0:
-        out.position[i, :] = ws.sums.p
+    anchor_bad = new_anchor(Wm, sC, sv, sp, pre, sums)
+    if valid == 0:
+        out.position[i, :] = sums.p
     for j in range(k):
         for r in range(3):
-            ws.w[r] = block.omega[i, j, r] - knobs.gyro_bias[i, r]
-        strapdown_increment(ws.w, block.f[i, j], dt, ws.dC, ws.f_mid)
-        anchor_force(ws.pre.D, ws.f_mid, ws.F)
-        cond, count = detect(i, j, block, s, knobs, det.history[i], count, sC[0], ws)
-        run, now, is_start, is_end = stance_logic(cond, run, in_stance, knobs.min_stance_samples[i])
-        out.stance[i, j], out.start[i, j], out.end[i, j] = now, is_start, is_end
+            w[r] = omega[j, r] - bias[r]
+        strapdown_increment(w, f[j], dt, dC, f_mid)
+        anchor_force(pre.D, f_mid, F)
+        cond, count = detect(
+            shoe_condition, j, w, F, C_central, history, count, omega_max, delta_f_max, s.detector_g
+        )
+        run, now, is_start, is_end = stance_logic(cond, run, in_stance, min_run)
+        stance[j], start[j], end[j] = now, is_start, is_end
         in_stance = now
         event = (is_start or is_end) if s.boundaries_only else (now or is_end)
         # ZUPT at this instant: the state before sample j is integrated
-        if event and moving and j < block.valid[i] and div_at > k:
+        if event and moving and j < valid and div_at > k:
             tau = (j - anchor) * dt
-            moved_states(sC, sv, sp, ws.pre, tau, g, ws.chi, ws.C_moved)
-            if anchor_bad or diverging(ws.C_moved[0], ws.chi[0, 3:6], ws.chi[0, 0:3], s.speed_max):
+            moved_states(sC, sv, sp, pre, tau, g, zs.chi, zs.C_moved)
+            if anchor_bad or diverging(zs.C_moved[0], zs.chi[0, 3:6], zs.chi[0, 0:3], s.speed_max):
                 div_at = j
             else:
                 kind = KIND_START if is_start else (KIND_END if is_end else KIND_STANCE)
                 ok, nis, n_log = zupt(
-                    i, j, kind, elapsed0 + tau, s, knobs, model, filt, log, n_log, ws
+                    i, j, kind, elapsed0 + tau, s, knobs, model, filt, log, n_log, zs
                 )
                 if ok:
                     n_acc += 1
                     nis_sum += math.log1p(nis)
                     last_acc = j
                 anchor, elapsed0, first_bad = j, 0.0, k + 1
-                anchor_bad = new_anchor(i, model, filt, ws)
-                ws.F[:] = ws.f_mid  # = D f_mid from the new anchor
+                anchor_bad = new_anchor(Wm, sC, sv, sp, pre, sums)
+                F[:] = f_mid  # = D f_mid from the new anchor
         # integrate sample j: state index t = j + 1
         if moving:
-            accumulate(ws.pre, ws.F, ws.dC, dt)
+            accumulate(pre, F, dC, dt)
         t = j + 1
         tau = (t - anchor) * dt if moving else 0.0
         if moving and div_at > k and first_bad > k:
-            if anchor_bad or central_point_diverges(
-                sC, sv, sp, ws.pre, tau, g, s.speed_max, ws.v_c, ws.p_c
-            ):
+            if anchor_bad or central_point_diverges(sC, sv, sp, pre, tau, g, s.speed_max, v_c, p_c):
                 first_bad = t
-        record_sample(i, j, tau, s, block, model, filt, out, ws)
+        # record the mean position / state after the sample
+        if record_pos or t == valid:
+            mean_position(sums, pre, tau, g, p_mean)
+            if record_pos:
+                positions[i, j] = p_mean
+            if t == valid:
+                out.position[i] = p_mean
+        if record_state:
+            mean_state_after(sC, sv, sp, pre, tau, g, Wm, zs, states[i, j])
     # end of the block: divergence after the last ZUPT, sigma points moved to K
     if div_at > k and first_bad <= k:
         div_at = first_bad
     if moving:
-        move_sigmas(sC, sv, sp, ws.pre, (k - anchor) * dt, g)
+        move_sigmas(sC, sv, sp, pre, (k - anchor) * dt, g)
     filt.elapsed_s[i] = elapsed0 + (k - anchor) * dt
     det.count[i], det.run[i], det.in_stance[i] = count, run, in_stance
     out.accepted[i] = n_acc
@@ -485,11 +502,12 @@ def advance_block(
     not empty, the mean position / state after every sample; ``log`` (when not
     empty, room for N·K rows) every ZUPT. Returns the number of logged ZUPTs.
     """
-    ws = new_workspace(model.Wm.shape[0], model.q_basis.shape[0])
+    ss = new_sample_scratch()
+    zs = new_zupt_scratch(model.Wm.shape[0], model.q_basis.shape[0])
     n_log = 0
     for i in range(block.omega.shape[0]):
         n_log = advance_walker(
-            i, block, settings, knobs, model, filters, detector, out, log, n_log, ws
+            i, block, settings, knobs, model, filters, detector, out, log, n_log, ss, zs
         )
     return n_log
 
