@@ -93,6 +93,7 @@ def test_preintegrated_increments_equal_sample_by_sample_strapdown():
     the strapdown of eq (3) run over samples a … t−1, to rounding."""
     from pednav_env.nav.preintegration import (
         Preintegral,
+        SigmaPoints,
         accumulate,
         anchor_force,
         move_sigmas,
@@ -117,7 +118,7 @@ def test_preintegrated_increments_equal_sample_by_sample_strapdown():
             anchor_force(pre.D, f_mid, F)
             accumulate(pre, F, dC, dt)
         C_t, v_t, p_t = quat_to_dcm(q0), v0.copy(), p0.copy()  # (1, 3, 3), (1, 3), (1, 3)
-        move_sigmas(C_t, v_t, p_t, pre, (t - a) * dt, g)
+        move_sigmas(SigmaPoints(C_t, v_t, p_t), pre, (t - a) * dt, g)
         np.testing.assert_allclose(C_t, quat_to_dcm(q[:, -1]), rtol=0, atol=1e-12)
         np.testing.assert_allclose(v_t, v[:, -1], rtol=0, atol=1e-12)
         np.testing.assert_allclose(p_t, p[:, -1], rtol=0, atol=1e-12)

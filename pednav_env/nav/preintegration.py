@@ -16,9 +16,10 @@ kernel accumulates them once per sample (:func:`strapdown_increment`,
 :func:`accumulate`) and moves the points only when it needs them
 (:func:`moved_states`, :func:`move_sigmas`).
 
-Sigma points are stored as attitude matrices ``C`` (S, 3, 3), velocities
-``v`` (S, 3) and positions ``p`` (S, 3) of one walker (m, m/s, navigation
-frame); the preintegrals as :class:`Preintegral`.
+A walker's sigma points are a :class:`SigmaPoints` (attitude matrices,
+velocities, positions), its preintegrals a :class:`Preintegral`. Helpers
+called at every sample are inlined by numba (``inline="always"``): a compiled
+call per sample costs more than the sample's arithmetic.
 """
 
 from __future__ import annotations
@@ -32,6 +33,14 @@ from numba import njit
 from pednav_env.rotations import dcm_euler_angles
 
 _dcm_euler_angles = njit(cache=True)(dcm_euler_angles)
+
+
+class SigmaPoints(NamedTuple):
+    """The S sigma points of one walker (navigation frame)."""
+
+    C: np.ndarray  # (S, 3, 3) attitude matrices C_nb
+    v: np.ndarray  # (S, 3) velocities (m/s)
+    p: np.ndarray  # (S, 3) positions (m)
 
 
 class Preintegral(NamedTuple):
@@ -112,18 +121,12 @@ def accumulate(pre: Preintegral, F: np.ndarray, dC: np.ndarray, dt: float) -> No
 
 @njit(cache=True)
 def moved_states(
-    C: np.ndarray,
-    v: np.ndarray,
-    p: np.ndarray,
-    pre: Preintegral,
-    tau: float,
-    g: float,
-    chi: np.ndarray,
-    C_moved: np.ndarray,
+    sig: SigmaPoints, pre: Preintegral, tau: float, g: float, chi: np.ndarray, C_moved: np.ndarray
 ) -> None:
-    """State vectors ``chi`` (S, 9) = [x, v, θ, γ, ψ] of the sigma points (C, v, p)
-    moved by the preintegrals over τ (s) (module docstring; x = (p + v τ) + C B);
+    """State vectors ``chi`` (S, 9) = [x, v, θ, γ, ψ] of the sigma points moved by
+    the preintegrals over τ (s) (module docstring; x = (p + v τ) + C B);
     ``C_moved`` (S, 3, 3) receives their attitudes C D. The points are unchanged."""
+    C, v, p = sig
     D, A, B = pre.D, pre.A, pre.B
     for s in range(chi.shape[0]):
         for r in range(3):
@@ -144,11 +147,10 @@ def moved_states(
 
 
 @njit(cache=True)
-def move_sigmas(
-    C: np.ndarray, v: np.ndarray, p: np.ndarray, pre: Preintegral, tau: float, g: float
-) -> None:
-    """Sigma points (C, v, p) moved by the preintegrals over τ (s), in place
+def move_sigmas(sig: SigmaPoints, pre: Preintegral, tau: float, g: float) -> None:
+    """Sigma points moved by the preintegrals over τ (s), in place
     (p ← p + (v τ + C B), an association of its own, kept so that results repeat)."""
+    C, v, p = sig
     D, A, B = pre.D, pre.A, pre.B
     for s in range(C.shape[0]):
         for r in range(3):
@@ -163,9 +165,7 @@ def move_sigmas(
 
 @njit(cache=True, inline="always")
 def central_point_diverges(
-    C: np.ndarray,
-    v: np.ndarray,
-    p: np.ndarray,
+    sig: SigmaPoints,
     pre: Preintegral,
     tau: float,
     g: float,
@@ -176,6 +176,7 @@ def central_point_diverges(
     """Whether the central sigma point (index 0) moved over τ has a non-finite
     anchor attitude, velocity or position, or a speed above ``speed_max`` (m/s);
     its velocity and position go to ``v_out``, ``p_out``."""
+    C, v, p = sig
     A, B = pre.A, pre.B
     for r in range(3):
         c0, c1, c2 = C[0, r, 0], C[0, r, 1], C[0, r, 2]
@@ -219,12 +220,11 @@ class AnchorSums(NamedTuple):
 
 
 @njit(cache=True)
-def weighted_sums(
-    Wm: np.ndarray, C: np.ndarray, v: np.ndarray, p: np.ndarray, sums: AnchorSums
-) -> None:
-    """Weighted sums of the sigma points (C, v, p) with weights ``Wm``: the mean
+def weighted_sums(Wm: np.ndarray, sig: SigmaPoints, sums: AnchorSums) -> None:
+    """Weighted sums of the sigma points with weights ``Wm``: the mean
     position after moving them over τ is affine in them,
     Σ Wm x + τ Σ Wm v + (Σ Wm C) B − ½ g τ² e₃ (:func:`mean_position`)."""
+    C, v, p = sig
     for r in range(3):
         sums.p[r] = 0.0
         sums.v[r] = 0.0

@@ -23,6 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
+from pednav_env.nav.preintegration import SigmaPoints
 from pednav_env.nav.ukf import floored_covariance
 from pednav_env.rotations import euler_dcm_rows, wrap_float
 
@@ -217,17 +218,16 @@ def draw_sigmas(
     x: np.ndarray,
     P: np.ndarray,
     spread: float,
-    C: np.ndarray,
-    v: np.ndarray,
-    p: np.ndarray,
+    sig: SigmaPoints,
     L: np.ndarray,
 ) -> bool:
-    """Sigma points of (x, P) with ``spread`` = L + λ, written as attitude matrices
-    ``C`` (S, 3, 3), velocities ``v`` and positions ``p`` (S, 3) (module docstring;
+    """Sigma points of (x, P) with ``spread`` = L + λ, written into ``sig`` as
+    attitude matrices, velocities and positions (module docstring;
     filterpy's ``MerweScaledSigmaPoints``, whose upper factor's rows are the lower
     factor's columns; ``L`` (9, 9) scratch). Returns True when (L + λ)P had no
     Cholesky factor and was repaired first
     (:func:`pednav_env.nav.ukf.floored_covariance`)."""
+    C, v, p = sig
     n = 9
     A = np.empty((n, n))
     for r in range(n):

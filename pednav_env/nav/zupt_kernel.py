@@ -58,6 +58,7 @@ from numba import njit
 from pednav_env.nav.preintegration import (
     AnchorSums,
     Preintegral,
+    SigmaPoints,
     accumulate,
     all_finite,
     anchor_force,
@@ -337,7 +338,8 @@ def zupt(
     filt.last_nis[i] = nis
     filt.x[i] = zs.x
     filt.P[i] = zs.P
-    if draw_sigmas(zs.x, zs.P, s.spread, filt.sig_C[i], filt.sig_v[i], filt.sig_p[i], zs.L):
+    sig = SigmaPoints(filt.sig_C[i], filt.sig_v[i], filt.sig_p[i])
+    if draw_sigmas(zs.x, zs.P, s.spread, sig, zs.L):
         filt.counters[i, 2] += 1
     if logging:
         log.index[n_log, 0] = i
@@ -352,22 +354,18 @@ def zupt(
 
 
 @njit(cache=True)
-def new_anchor(
-    Wm: np.ndarray, C: np.ndarray, v: np.ndarray, p: np.ndarray, pre: Preintegral, sums: AnchorSums
-) -> bool:
-    """Preintegrals restarted at the sigma points (C, v, p) and their weighted sums
-    taken. Returns whether the central attitude is non-finite."""
+def new_anchor(Wm: np.ndarray, sig: SigmaPoints, pre: Preintegral, sums: AnchorSums) -> bool:
+    """Preintegrals restarted at the sigma points and their weighted sums taken.
+    Returns whether the central attitude is non-finite."""
     restart(pre)
-    weighted_sums(Wm, C, v, p, sums)
-    return not all_finite(C[0])
+    weighted_sums(Wm, sig, sums)
+    return not all_finite(sig.C[0])
 
 
 # ------------------------------------------------------------------ records
 @njit(cache=True)
 def mean_state_after(
-    C: np.ndarray,
-    v: np.ndarray,
-    p: np.ndarray,
+    sig: SigmaPoints,
     pre: Preintegral,
     tau: float,
     g: float,
@@ -375,8 +373,8 @@ def mean_state_after(
     zs: ZuptScratch,
     out: np.ndarray,
 ) -> None:
-    """``out`` (9,) ← the mean state of the sigma points (C, v, p) moved over τ (s)."""
-    moved_states(C, v, p, pre, tau, g, zs.chi, zs.C_moved)
+    """``out`` (9,) ← the mean state of the sigma points moved over τ (s)."""
+    moved_states(sig, pre, tau, g, zs.chi, zs.C_moved)
     state_mean(zs.chi, Wm, out)
 
 
@@ -405,8 +403,8 @@ def advance_walker(
     omega, f, bias, valid = block.omega[i], block.f[i], knobs.gyro_bias[i], block.valid[i]
     shoe_condition = block.shoe_cond[i]
     moving = not block.frozen[i]
-    sC, sv, sp, Wm = filt.sig_C[i], filt.sig_v[i], filt.sig_p[i], model.Wm
-    C_central, history, min_run = sC[0], det.history[i], knobs.min_stance_samples[i]
+    sig, Wm = SigmaPoints(filt.sig_C[i], filt.sig_v[i], filt.sig_p[i]), model.Wm
+    C_central, history, min_run = sig.C[0], det.history[i], knobs.min_stance_samples[i]
     omega_max, delta_f_max = knobs.omega_max[i], knobs.delta_f_max[i]
     stance, start, end = out.stance[i], out.start[i], out.end[i]
     positions, states = out.positions, out.states
@@ -419,7 +417,7 @@ def advance_walker(
     first_bad = k + 1  # first state index whose central point diverged (after the last ZUPT)
     div_at = k + 1  # state index of divergence (at a ZUPT's prior, or first_bad)
     last_acc, n_acc, nis_sum = -1, 0, 0.0
-    anchor_bad = new_anchor(Wm, sC, sv, sp, pre, sums)
+    anchor_bad = new_anchor(Wm, sig, pre, sums)
     if valid == 0:
         out.position[i, :] = sums.p
     for j in range(k):
@@ -437,7 +435,7 @@ def advance_walker(
         # ZUPT at this instant: the state before sample j is integrated
         if event and moving and j < valid and div_at > k:
             tau = (j - anchor) * dt
-            moved_states(sC, sv, sp, pre, tau, g, zs.chi, zs.C_moved)
+            moved_states(sig, pre, tau, g, zs.chi, zs.C_moved)
             if anchor_bad or diverging(zs.C_moved[0], zs.chi[0, 3:6], zs.chi[0, 0:3], s.speed_max):
                 div_at = j
             else:
@@ -450,7 +448,7 @@ def advance_walker(
                     nis_sum += math.log1p(nis)
                     last_acc = j
                 anchor, elapsed0, first_bad = j, 0.0, k + 1
-                anchor_bad = new_anchor(Wm, sC, sv, sp, pre, sums)
+                anchor_bad = new_anchor(Wm, sig, pre, sums)
                 F[:] = f_mid  # = D f_mid from the new anchor
         # integrate sample j: state index t = j + 1
         if moving:
@@ -458,7 +456,7 @@ def advance_walker(
         t = j + 1
         tau = (t - anchor) * dt if moving else 0.0
         if moving and div_at > k and first_bad > k:
-            if anchor_bad or central_point_diverges(sC, sv, sp, pre, tau, g, s.speed_max, v_c, p_c):
+            if anchor_bad or central_point_diverges(sig, pre, tau, g, s.speed_max, v_c, p_c):
                 first_bad = t
         # record the mean position / state after the sample
         if record_pos or t == valid:
@@ -468,12 +466,12 @@ def advance_walker(
             if t == valid:
                 out.position[i] = p_mean
         if record_state:
-            mean_state_after(sC, sv, sp, pre, tau, g, Wm, zs, states[i, j])
+            mean_state_after(sig, pre, tau, g, Wm, zs, states[i, j])
     # end of the block: divergence after the last ZUPT, sigma points moved to K
     if div_at > k and first_bad <= k:
         div_at = first_bad
     if moving:
-        move_sigmas(sC, sv, sp, pre, (k - anchor) * dt, g)
+        move_sigmas(sig, pre, (k - anchor) * dt, g)
     filt.elapsed_s[i] = elapsed0 + (k - anchor) * dt
     det.count[i], det.run[i], det.in_stance[i] = count, run, in_stance
     out.accepted[i] = n_acc
@@ -514,16 +512,21 @@ def advance_block(
 
 @njit(cache=True)
 def redraw_sigmas(
-    lanes: np.ndarray, x: np.ndarray, P: np.ndarray, spread: float, filters: WalkerFilters
+    lanes: np.ndarray,
+    x: np.ndarray,
+    P: np.ndarray,
+    spread: float,
+    sig_C: np.ndarray,
+    sig_v: np.ndarray,
+    sig_p: np.ndarray,
 ) -> np.ndarray:
-    """Draw the sigma points of walkers ``lanes`` from their (x, P) rows
-    (``x`` (B, 9), ``P`` (B, 9, 9); :func:`pednav_env.nav.zupt_algebra.draw_sigmas`);
-    returns the mask of covariances that had to be repaired."""
+    """Draw the sigma points ``sig_C``, ``sig_v``, ``sig_p`` (N, S, ·) of walkers
+    ``lanes`` from their (x, P) rows (``x`` (B, 9), ``P`` (B, 9, 9);
+    :func:`pednav_env.nav.zupt_algebra.draw_sigmas`); returns the mask of
+    covariances that had to be repaired."""
     L = np.zeros((9, 9))
     bad = np.zeros(lanes.shape[0], dtype=np.bool_)
     for j in range(lanes.shape[0]):
         i = lanes[j]
-        bad[j] = draw_sigmas(
-            x[j], P[j], spread, filters.sig_C[i], filters.sig_v[i], filters.sig_p[i], L
-        )
+        bad[j] = draw_sigmas(x[j], P[j], spread, SigmaPoints(sig_C[i], sig_v[i], sig_p[i]), L)
     return bad

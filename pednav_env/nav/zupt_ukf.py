@@ -264,7 +264,7 @@ class ZuptUkf:
         idx = np.asarray(idx, dtype=np.int64)
         x = np.ascontiguousarray(x, dtype=float)
         P = np.ascontiguousarray(P, dtype=float)
-        bad = redraw_sigmas(idx, x, P, self.settings.spread, self._filters(self.counters()))
+        bad = redraw_sigmas(idx, x, P, self.settings.spread, self.sig_C, self.sig_v, self.sig_p)
         self.repairs[idx] += bad
         self.x[idx], self.P[idx] = x, P
         self.elapsed_s[idx] = 0.0
