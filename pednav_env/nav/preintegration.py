@@ -119,6 +119,16 @@ def accumulate(pre: Preintegral, F: np.ndarray, dC: np.ndarray, dt: float) -> No
             D[r, c] = d0 * dC[0, c] + d1 * dC[1, c] + d2 * dC[2, c]
 
 
+@njit(cache=True, inline="always")
+def _row_times(C: np.ndarray, r: int, D: np.ndarray, out: np.ndarray) -> tuple[float, float, float]:
+    """Row r of C D into row r of ``out`` (which may be C itself); returns row r of
+    C as it was."""
+    c0, c1, c2 = C[r, 0], C[r, 1], C[r, 2]
+    for c in range(3):
+        out[r, c] = c0 * D[0, c] + c1 * D[1, c] + c2 * D[2, c]
+    return c0, c1, c2
+
+
 @njit(cache=True)
 def moved_states(
     sig: SigmaPoints, pre: Preintegral, tau: float, g: float, chi: np.ndarray, C_moved: np.ndarray
@@ -130,9 +140,7 @@ def moved_states(
     D, A, B = pre.D, pre.A, pre.B
     for s in range(chi.shape[0]):
         for r in range(3):
-            c0, c1, c2 = C[s, r, 0], C[s, r, 1], C[s, r, 2]
-            for c in range(3):
-                C_moved[s, r, c] = c0 * D[0, c] + c1 * D[1, c] + c2 * D[2, c]
+            c0, c1, c2 = _row_times(C[s], r, D, C_moved[s])
             ca = c0 * A[0] + c1 * A[1] + c2 * A[2]
             cb = c0 * B[0] + c1 * B[1] + c2 * B[2]
             chi[s, r] = p[s, r] + v[s, r] * tau + cb
@@ -154,9 +162,7 @@ def move_sigmas(sig: SigmaPoints, pre: Preintegral, tau: float, g: float) -> Non
     D, A, B = pre.D, pre.A, pre.B
     for s in range(C.shape[0]):
         for r in range(3):
-            c0, c1, c2 = C[s, r, 0], C[s, r, 1], C[s, r, 2]
-            for c in range(3):
-                C[s, r, c] = c0 * D[0, c] + c1 * D[1, c] + c2 * D[2, c]
+            c0, c1, c2 = _row_times(C[s], r, D, C[s])
             p[s, r] += v[s, r] * tau + c0 * B[0] + c1 * B[1] + c2 * B[2]
             v[s, r] += c0 * A[0] + c1 * A[1] + c2 * A[2]
         p[s, 2] -= 0.5 * g * (tau * tau)

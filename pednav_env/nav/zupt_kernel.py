@@ -55,6 +55,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from pednav_env.nav.detector_kernel import Eq5Thresholds, detect, stance_logic
 from pednav_env.nav.preintegration import (
     AnchorSums,
     Preintegral,
@@ -229,77 +230,44 @@ def new_zupt_scratch(num_sigmas: int, num_powers: int) -> ZuptScratch:
     )
 
 
-# ------------------------------------------------------------------ detector
-@njit(cache=True, inline="always")
-def eq5_condition(
-    w: np.ndarray,
-    f_n3: float,
-    history: np.ndarray,
-    count: int,
-    omega_max: float,
-    delta_f_max: float,
-    g: float,
-) -> tuple[bool, int]:
-    """Paper 003 eq (5), |ω'| ≤ ω_max and |f'_x3 − g| ≤ Δf_max, on causal means over
-    the window of W = len(history) + 1 samples (the first samples of a walker
-    average over fewer). ``w`` (rad/s) is the sample's rate, ``f_n3`` (m/s²) its
-    vertical specific force; ``history`` (W − 1, 2) is advanced in place.
-    Returns (condition, samples seen capped at W)."""
-    window = history.shape[0] + 1
-    w_norm = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-    if window == 1:
-        om, fm = w_norm, f_n3
-        count = 1
-    else:
-        s_om, s_f = 0.0, 0.0
-        for h in range(window - 1):
-            s_om += history[h, 0]
-            s_f += history[h, 1]
-        s_om += w_norm
-        s_f += f_n3
-        count = min(count + 1, window)
-        om, fm = s_om / count, s_f / count
-        for h in range(window - 2):
-            history[h, 0] = history[h + 1, 0]
-            history[h, 1] = history[h + 1, 1]
-        history[window - 2, 0] = w_norm
-        history[window - 2, 1] = f_n3
-    return (om <= omega_max) and (abs(fm - g) <= delta_f_max), count
+def new_detector_state(num_walkers: int, window: int) -> DetectorState:
+    """Detector state of walkers that have seen no sample, window W = ``window``."""
+    n = num_walkers
+    return DetectorState(
+        np.zeros((n, window - 1, 2)),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n, dtype=bool),
+    )
 
 
-@njit(cache=True, inline="always")
-def detect(
-    shoe_condition: np.ndarray,
-    j: int,
-    w: np.ndarray,
-    F: np.ndarray,
-    C_central: np.ndarray,
-    history: np.ndarray,
-    count: int,
-    omega_max: float,
-    delta_f_max: float,
-    g: float,
-) -> tuple[bool, int]:
-    """Stance condition at sample j: the SHOE condition ``shoe_condition[j]`` when
-    the walker's row (K,) is given (empty for eq 5), else eq (5)
-    (:func:`eq5_condition`) with f'_x3 = e₃ᵀ C_c F, F = D f_mid, through the
-    central sigma point's anchor attitude ``C_central`` (its attitude now is
-    C_c D). Returns (condition, samples seen)."""
-    if shoe_condition.shape[0] > 0:
-        return shoe_condition[j], min(count + 1, history.shape[0] + 1)
-    f_n3 = C_central[2, 0] * F[0] + C_central[2, 1] * F[1] + C_central[2, 2] * F[2]
-    return eq5_condition(w, f_n3, history, count, omega_max, delta_f_max, g)
+def new_block_output(
+    num_walkers: int, num_samples: int, positions: bool, states: bool
+) -> BlockOutput:
+    """Output arrays of a block; per-sample positions and states only when asked."""
+    n, k = num_walkers, num_samples
+    return BlockOutput(
+        np.zeros((n, k), dtype=bool),
+        np.zeros((n, k), dtype=bool),
+        np.zeros((n, k), dtype=bool),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n),
+        np.empty((n, 3)),
+        np.empty(n, dtype=np.int64),
+        np.empty(n, dtype=np.int64),
+        np.empty((n, k, 3) if positions else (0, 0, 3)),
+        np.empty((n, k, 9) if states else (0, 0, 9)),
+    )
 
 
-@njit(cache=True, inline="always")
-def stance_logic(
-    condition: bool, run: int, in_stance: bool, min_run: int
-) -> tuple[int, bool, bool, bool]:
-    """Stance declared once the condition held ``min_run`` samples (causal; the
-    declaration is delayed, never back-dated). Returns (run, stance, start, end)."""
-    run = run + 1 if condition else 0
-    now = run >= min_run
-    return run, now, now and not in_stance, in_stance and not now
+def new_update_log(rows: int) -> UpdateLog:
+    """An update log with room for ``rows`` ZUPTs (0: no logging)."""
+    return UpdateLog(
+        np.zeros((rows, 4), dtype=np.int64),
+        np.empty((rows, 2, 9)),
+        np.empty((rows, 2, 9, 9)),
+        np.empty(rows),
+    )
 
 
 # ------------------------------------------------------------------ ZUPT
@@ -405,7 +373,7 @@ def advance_walker(
     moving = not block.frozen[i]
     sig, Wm = SigmaPoints(filt.sig_C[i], filt.sig_v[i], filt.sig_p[i]), model.Wm
     C_central, history, min_run = sig.C[0], det.history[i], knobs.min_stance_samples[i]
-    omega_max, delta_f_max = knobs.omega_max[i], knobs.delta_f_max[i]
+    thresholds = Eq5Thresholds(knobs.omega_max[i], knobs.delta_f_max[i], s.detector_g)
     stance, start, end = out.stance[i], out.start[i], out.end[i]
     positions, states = out.positions, out.states
     record_pos, record_state = positions.shape[0] > 0, states.shape[0] > 0
@@ -425,9 +393,7 @@ def advance_walker(
             w[r] = omega[j, r] - bias[r]
         strapdown_increment(w, f[j], dt, dC, f_mid)
         anchor_force(pre.D, f_mid, F)
-        cond, count = detect(
-            shoe_condition, j, w, F, C_central, history, count, omega_max, delta_f_max, s.detector_g
-        )
+        cond, count = detect(shoe_condition, j, w, F, C_central, history, count, thresholds)
         run, now, is_start, is_end = stance_logic(cond, run, in_stance, min_run)
         stance[j], start[j], end[j] = now, is_start, is_end
         in_stance = now

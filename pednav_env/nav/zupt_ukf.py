@@ -15,11 +15,9 @@ One engine for every walker: :class:`ZuptUkf` holds the sigma points of N
 walkers, ``(N, 2L+1, ·)``, and :meth:`ZuptUkf.advance` moves all of them
 through a block of K IMU samples (one decision interval of the env) in one
 call of the compiled kernel :func:`pednav_env.nav.zupt_kernel.advance_block`,
-which runs walker after walker, sample after sample. Between two ZUPTs a
-walker's sigma points only follow the strapdown, which is affine in the
-starting state, so they are moved from their last redraw straight to the next
-ZUPT by preintegrated increments of the walker's IMU record, not sample by
-sample (the kernel's module docstring). After a ZUPT the detector reads the
+walker after walker, sample after sample: between two ZUPTs the sigma points
+follow the strapdown by preintegrated increments of the IMU record
+(:mod:`pednav_env.nav.preintegration`); after a ZUPT the detector reads the
 vertical specific force of eq (5) through the corrected attitude.
 :meth:`ZuptUkf.step` is the same call with K = 1, and the result depends on
 the blocking only through rounding (tested).
@@ -60,13 +58,15 @@ from pednav_env.nav.zupt_config import UpdateMode, ZuptUkfConfig
 from pednav_env.nav.zupt_kernel import (
     BlockInput,
     BlockOutput,
-    DetectorState,
     KernelSettings,
     UkfModel,
     UpdateLog,
     WalkerFilters,
     WalkerKnobs,
     advance_block,
+    new_block_output,
+    new_detector_state,
+    new_update_log,
     redraw_sigmas,
 )
 from pednav_env.nav.zupt_model import STATE_DIM, dcm_to_state, process_noise_basis, state_mean
@@ -193,13 +193,7 @@ class ZuptUkf:
         self.last_nis = np.zeros(n)
         self.time_since_update_s = np.zeros(n)
         self.gyro_bias = np.zeros((n, 3))
-        window = detector_window(det, self.rate_hz)
-        self.detector_state = DetectorState(
-            np.zeros((n, window - 1, 2)),
-            np.zeros(n, dtype=np.int64),
-            np.zeros(n, dtype=np.int64),
-            np.zeros(n, dtype=bool),
-        )
+        self.detector_state = new_detector_state(n, detector_window(det, self.rate_hz))
         self.model = UkfModel(
             process_noise_basis(config.assumed_imu, self.rate_hz), self.weights.Wm, self.weights.Wc
         )
@@ -305,25 +299,8 @@ class ZuptUkf:
         """
         block = self._block_input(omega_b, f_b, shoe_statistic, valid, record)
         n, k = self.n, block.omega.shape[1]
-        out = BlockOutput(
-            np.zeros((n, k), dtype=bool),
-            np.zeros((n, k), dtype=bool),
-            np.zeros((n, k), dtype=bool),
-            np.zeros(n, dtype=np.int64),
-            np.zeros(n),
-            np.empty((n, 3)),
-            np.empty(n, dtype=np.int64),
-            np.empty(n, dtype=np.int64),
-            np.empty((n, k, 3) if record is not None else (0, 0, 3)),
-            np.empty((n, k, STATE_DIM) if record == "state" else (0, 0, STATE_DIM)),
-        )
-        rows = n * k if self.record_updates else 0
-        log = UpdateLog(
-            np.zeros((rows, 4), dtype=np.int64),
-            np.empty((rows, 2, STATE_DIM)),
-            np.empty((rows, 2, STATE_DIM, STATE_DIM)),
-            np.empty(rows),
-        )
+        out = new_block_output(n, k, record is not None, record == "state")
+        log = new_update_log(n * k if self.record_updates else 0)
         counters = self.counters()
         filters = self._filters(counters)
         n_log = advance_block(
