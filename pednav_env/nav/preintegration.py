@@ -243,7 +243,7 @@ def weighted_sums(Wm: np.ndarray, sig: SigmaPoints, sums: AnchorSums) -> None:
                 sums.C[r, c] += Wm[s] * C[s, r, c]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def mean_position(
     sums: AnchorSums, pre: Preintegral, tau: float, g: float, out: np.ndarray
 ) -> None:

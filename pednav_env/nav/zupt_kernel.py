@@ -8,10 +8,11 @@ walker and sample after sample, the filter that the module docstring of
 1. :func:`pednav_env.nav.preintegration.strapdown_increment`: the strapdown
    increments of paper 003 eq (3) (attitude increment C(Δq), Δq from
    k = ω'Δt, and the specific force in mid-interval axes);
-2. :func:`detect`: the stance detector, eq (5) on |ω'| and f'_x3 (the
-   vertical specific force through the central sigma point's attitude) with
-   its causal window, or a SHOE condition computed from the raw record;
-   then the minimum stance duration (:func:`stance_logic`);
+2. :func:`pednav_env.nav.detector_kernel.detect`: the stance detector, eq (5)
+   on |ω'| and f'_x3 (the vertical specific force through the central sigma
+   point's attitude) with its causal window, or a SHOE condition computed from
+   the raw record; then the minimum stance duration
+   (:func:`pednav_env.nav.detector_kernel.stance_logic`);
 3. at a detected stance start or end (or at every stance sample),
    :func:`zupt`: the 19 sigma points are moved from their last draw to this
    instant, their unscented mean and covariance plus Q(τ) form the prior, the
@@ -21,8 +22,10 @@ walker and sample after sample, the filter that the module docstring of
 4. the sample is added to the preintegrals D, A, B (the points themselves are
    moved only at a ZUPT and at the end of the block,
    :mod:`pednav_env.nav.preintegration`), the central point is checked for
-   divergence after the walker's last ZUPT and the mean position or state is
-   recorded (:func:`record_sample`).
+   divergence after the walker's last ZUPT
+   (:func:`pednav_env.nav.preintegration.central_point_diverges`) and the mean
+   position or state is recorded
+   (:func:`pednav_env.nav.preintegration.mean_position`, :func:`mean_state_after`).
 
 The static alignment of eq (4) happens before, in
 :meth:`~pednav_env.nav.zupt_ukf.ZuptUkf.initialize`.
@@ -31,7 +34,12 @@ Arguments are grouped in NamedTuples of arrays and scalars
 (:class:`KernelSettings`, :class:`WalkerKnobs`, :class:`UkfModel`,
 :class:`WalkerFilters`, :class:`DetectorState`, :class:`BlockInput`,
 :class:`BlockOutput`, :class:`UpdateLog`), which numba passes to compiled code
-as they are; per-walker scratch arrays are a :class:`Workspace`.
+as they are; scratch arrays are a :class:`SampleScratch` and a
+:class:`ZuptScratch`, allocated once per block. :func:`advance_walker` takes a
+walker's arrays out of the tuples before its sample loop, and the helpers
+called at every sample are inlined by numba: a compiled call per sample, with
+whole tuples as arguments, would cost more than the sample's arithmetic
+(docs/PERFORMANCE.md).
 
 Why compiled code here, against the rule of one batched numpy call chain
 (docs/CONVENTIONS.md): a ZUPT happens at data-dependent samples of each walker (stance detection flickers on
