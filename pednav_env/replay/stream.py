@@ -47,7 +47,8 @@ from numpy.typing import NDArray
 
 from pednav_env.nav.detectors import shoe_statistic, window_samples
 from pednav_env.nav.mounting import mounting_rotation, rotate_samples
-from pednav_env.nav.zupt_ukf import STATE_DIM, ZuptUkf
+from pednav_env.nav.zupt_model import STATE_DIM
+from pednav_env.nav.zupt_ukf import ZuptUkf
 from pednav_env.replay.runner import set_knob, state_covariance, with_gravity_of
 from pednav_env.replay.setup import RealFilterSetup, named_setup
 from pednav_env.replay.start import find_still_start
