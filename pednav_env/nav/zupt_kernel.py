@@ -42,13 +42,14 @@ whole tuples as arguments, would cost more than the sample's arithmetic
 (docs/PERFORMANCE.md).
 
 Why compiled code here, against the rule of one batched numpy call chain
-(docs/CONVENTIONS.md): a ZUPT happens at data-dependent samples of each walker (stance detection flickers on
-consumer-grade IMUs, up to 20 boundaries per walker and 0.5 s interval), so a
-batched numpy engine must run the updates in rounds across walkers with a
-fixed per-call cost; that cost, not arithmetic, bounded its throughput
-(docs/PERFORMANCE.md). The kernel is still the one implementation of the
-filter for every walker count: walker i's arithmetic never depends on the
-others, so lane i of a vector env equals a scalar env bit for bit.
+(docs/CONVENTIONS.md): a ZUPT happens at data-dependent samples of each
+walker (stance detection flickers on consumer-grade IMUs, up to 20
+boundaries per walker and 0.5 s interval), so a batched numpy engine must run
+the updates in rounds across walkers with a fixed per-call cost; that cost,
+not arithmetic, bounded its throughput (docs/PERFORMANCE.md). The kernel is
+still the one implementation of the filter for every walker count: walker i's
+arithmetic never depends on the others, so lane i of a vector env equals a
+scalar env bit for bit.
 
 Numba caches the compiled functions on disk per source file; after editing a
 compiled function of another module that this one calls, touch this file (or
