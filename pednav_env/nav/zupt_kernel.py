@@ -27,8 +27,7 @@ walker and sample after sample, the filter that the module docstring of
    position or state is recorded
    (:func:`pednav_env.nav.preintegration.mean_position`, :func:`mean_state_after`).
 
-The static alignment of eq (4) happens before, in
-:meth:`~pednav_env.nav.zupt_ukf.ZuptUkf.initialize`.
+(The static alignment of eq (4) comes before: :meth:`~pednav_env.nav.zupt_ukf.ZuptUkf.initialize`.)
 
 Arguments are grouped in NamedTuples of arrays and scalars
 (:class:`KernelSettings`, :class:`WalkerKnobs`, :class:`UkfModel`,
@@ -41,15 +40,11 @@ called at every sample are inlined by numba: a compiled call per sample, with
 whole tuples as arguments, would cost more than the sample's arithmetic
 (docs/PERFORMANCE.md).
 
-Why compiled code here, against the rule of one batched numpy call chain
-(docs/CONVENTIONS.md): a ZUPT happens at data-dependent samples of each
-walker (stance detection flickers on consumer-grade IMUs, up to 20
-boundaries per walker and 0.5 s interval), so a batched numpy engine must run
-the updates in rounds across walkers with a fixed per-call cost; that cost,
-not arithmetic, bounded its throughput (docs/PERFORMANCE.md). The kernel is
-still the one implementation of the filter for every walker count: walker i's
-arithmetic never depends on the others, so lane i of a vector env equals a
-scalar env bit for bit.
+Compiled code here, against the rule of one batched numpy call chain
+(docs/CONVENTIONS.md), because ZUPTs fall at data-dependent samples of each
+walker: a numpy engine must run them in rounds across walkers, at a per-call
+cost (docs/PERFORMANCE.md). Walker i's arithmetic never depends on the others,
+so lane i of a vector env equals a scalar env bit for bit.
 
 Numba caches the compiled functions on disk per source file; after editing a
 compiled function of another module that this one calls, touch this file (or
@@ -372,10 +367,7 @@ def advance_walker(
     zs: ZuptScratch,
 ) -> int:
     """Walker i through the block (module docstring). Returns the next log row."""
-    # Walker i's arrays are taken out of the tuples once: the per-sample loop
-    # calls helpers with arrays and scalars only (a call per sample with whole
-    # tuples, hundreds of machine arguments, costs more than the sample's
-    # arithmetic).
+    # walker i's arrays, out of the tuples once: the sample loop passes no tuple (module doc)
     k, dt, g = block.omega.shape[1], s.dt, s.g
     omega, f, bias, valid = block.omega[i], block.f[i], knobs.gyro_bias[i], block.valid[i]
     shoe_condition = block.shoe_cond[i]
