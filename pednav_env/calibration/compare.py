@@ -79,18 +79,18 @@ class SimModel:
         walks: int,
         seed: int,
         duration_s: tuple[float, float] = SIM_DURATION_S,
+        per_stride: bool = True,
     ) -> list[WalkStats]:
         """``walks`` simulated walks at the band's speeds, ``duration_s`` long; walk i
-        draws from ``default_rng([seed, i])``."""
+        draws from ``default_rng([seed, i])``. ``per_stride`` as in
+        :func:`pednav_env.calibration.stats.walk_stats`."""
         lo, hi = band
         speeds = (lo, min(hi, SIM_TOP_SPEED_MPS))
         rngs = [np.random.default_rng([seed, i]) for i in range(walks)]
         routes = []
         for rng in rngs:
             motion = None if self.stance is None else self.stance.draw(rng)
-            cfg = SpeedRouteConfig(
-                speed_mps=speeds, duration_s=SIM_DURATION_S, stance_motion=motion
-            )
+            cfg = SpeedRouteConfig(speed_mps=speeds, duration_s=duration_s, stance_motion=motion)
             routes.append(speed_route(rng, cfg))
         truth = simulate_foot(routes, FootSimConfig(rate_hz=SIM_RATE_HZ), full_state=False)
         spec = IMU_GRADES[self.imu_grade]()
@@ -98,7 +98,7 @@ class SimModel:
             truth.omega_b, truth.f_b, SIM_RATE_HZ, spec, rngs, gait_step_index=truth.gait_step
         )
         return [
-            walk_stats(samples_from_simulation(truth, imu, i, f"{self.name}{i}"))
+            walk_stats(samples_from_simulation(truth, imu, i, f"{self.name}{i}"), per_stride)
             for i in range(walks)
         ]
 

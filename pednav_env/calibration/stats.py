@@ -12,7 +12,14 @@ What the simulator is compared on (docs/SIM_TO_REAL.md):
   standing (truth positions), or the footprint path length over the walking
   time between the first and the last footprint;
 - **per stride**: speed, stance duration, and the medians of |ω| (rad/s) and
-  ||f| − g| (m/s²) in stance and in swing.
+  ||f| − g| (m/s²) in stance and in swing;
+- the **quiet phase**, measured the same way on every walk whatever its
+  labels: the runs of the walking part whose log10 SHOE lies below the
+  midpoint between the walk's own p10 and p50 (the detector rule below),
+  as a share of the walking time and as the median run length (s). PyShoe's
+  stored labels are each trial's optimised detector output (their stance
+  share ranges 0.1–0.6 of the cycle between trials), so stance durations from
+  labels do not compare with the simulator's truth; the quiet phase does.
 
 Stance comes, in this order of preference, from labels stored with the walk
 (PyShoe's ``zv_vicon_opt``, the simulator's truth), from the truth velocity
@@ -26,6 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import StrEnum
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -176,6 +184,35 @@ class WalkStats:
     def log_shoe_p50(self) -> float:
         return float(np.percentile(self.log_shoe, 50)) if self.log_shoe.size else float("nan")
 
+    @property
+    def log_shoe_p90(self) -> float:
+        """90th percentile of log10 SHOE: how vigorous the swing is."""
+        return float(np.percentile(self.log_shoe, 90)) if self.log_shoe.size else float("nan")
+
+    @cached_property
+    def quiet(self) -> Flags:
+        """The quiet phase of the walking part, per sample of ``log_shoe``
+        (module docstring)."""
+        if self.log_shoe.size < 2:
+            return np.zeros(self.log_shoe.size, dtype=bool)
+        return quiet_phase(self.log_shoe, self.rate_hz)
+
+    @property
+    def quiet_runs_s(self) -> Array:
+        """Lengths (s) of the quiet runs of the walking part."""
+        starts, ends = runs(self.quiet)
+        return (ends - starts) / self.rate_hz
+
+    @property
+    def quiet_fraction(self) -> float:
+        """Share of the walking time in quiet runs, NaN without a walking part."""
+        return float(self.quiet.mean()) if self.quiet.size else float("nan")
+
+    @property
+    def quiet_s_median(self) -> float:
+        """Median quiet-run length (s), NaN without runs."""
+        return _median(self.quiet_runs_s)
+
     def summary(self) -> dict[str, Any]:
         """Scalars for JSON: the measure, the speeds and the stride medians."""
         st = self.strides
@@ -193,6 +230,9 @@ class WalkStats:
             "standing_s": round(self.standing_s, 3),
             "log_shoe_p10": round(self.log_shoe_p10, 4),
             "log_shoe_p50": round(self.log_shoe_p50, 4),
+            "log_shoe_p90": round(self.log_shoe_p90, 4),
+            "quiet_fraction": round(self.quiet_fraction, 4),
+            "quiet_s_median": med(self.quiet_runs_s),
             "strides": st.count,
             "stride_speed_median_mps": med(st.speed_mps),
             "stance_s_median": med(st.stance_s),
@@ -254,6 +294,20 @@ def truth_velocity_stance(truth_pos: Array, rate_hz: float) -> Flags:
     return ok & (smooth < TRUTH_STANCE_SPEED_MPS)
 
 
+def quiet_threshold(log_shoe: Array) -> float:
+    """The detector's level inside the walking part: the midpoint in log between
+    the p10 and p50 of ``log_shoe``."""
+    p10, p50 = np.percentile(log_shoe, (10, 50))
+    return float(0.5 * (p10 + p50))
+
+
+def quiet_phase(log_shoe: Array, rate_hz: float) -> Flags:
+    """Samples of ``log_shoe`` (a walking part) below :func:`quiet_threshold`, runs
+    and gaps shorter than :data:`LABEL_MIN_RUN_S` cleaned as labels are."""
+    quiet = log_shoe < quiet_threshold(log_shoe)
+    return clean_labels(quiet, max(1, int(round(LABEL_MIN_RUN_S * rate_hz))))
+
+
 def _path_length(pos: Array, mask: Flags) -> float:
     """Horizontal path length over the steps k → k+1 with both samples in ``mask``."""
     step = np.linalg.norm(np.diff(pos[:, :2], axis=0), axis=1)
@@ -265,8 +319,9 @@ def _median(x: Array) -> float:
     return float(np.median(x)) if x.size else float("nan")
 
 
-def walk_stats(samples: WalkSamples) -> WalkStats:
-    """The statistics of one walk (module docstring)."""
+def walk_stats(samples: WalkSamples, per_stride: bool = True) -> WalkStats:
+    """The statistics of one walk (module docstring); ``per_stride`` False leaves
+    the per-stride arrays empty (the cost of a fit's many simulated walks)."""
     s = samples
     rate = float(s.rate_hz)
     log_t = log10_shoe(s.omega_b, s.f_b, rate, s.g)
@@ -280,8 +335,7 @@ def walk_stats(samples: WalkSamples) -> WalkStats:
     stand = long_runs(stance, stand_min)
     walking = ~stand
     if source is StanceSource.DETECTOR and walking.any():
-        mid = 0.5 * (np.percentile(log_t[walking], 10) + np.percentile(log_t[walking], 50))
-        stance = stand | (log_t < mid)
+        stance = stand | (log_t < quiet_threshold(log_t[walking]))
     if s.footfall_index is not None and len(s.footfall_index) >= 2:
         idx = np.asarray(s.footfall_index, dtype=np.int64)
         walking[: idx[0]] = False  # the walk is between the first and last footprint
@@ -295,7 +349,7 @@ def walk_stats(samples: WalkSamples) -> WalkStats:
     elif s.truth_pos is not None and walking_s > 0:
         speed_source = SpeedSource.TRUTH
         speed = _path_length(np.asarray(s.truth_pos, dtype=float), walking) / walking_s
-    strides = _stride_stats(s, stance, stand, rate)
+    strides = _stride_stats(s, stance, stand, rate) if per_stride else _no_strides()
     return WalkStats(
         name=s.name,
         rate_hz=rate,
@@ -307,6 +361,10 @@ def walk_stats(samples: WalkSamples) -> WalkStats:
         log_shoe=log_t[walking],
         strides=strides,
     )
+
+
+def _no_strides() -> StrideStats:
+    return StrideStats(*np.zeros((8, 0)))
 
 
 def _stride_stats(s: WalkSamples, stance: Flags, stand: Flags, rate: float) -> StrideStats:

@@ -420,11 +420,24 @@ _WALK_BOUNDS = (
     np.array((0.93, *np.array(_WALK_DRAWS)[6:, 0])),
     np.array((1.07, *np.array(_WALK_DRAWS)[6:, 1])),
 )
+#: Middle of the walking stance share's range (0.30–0.38).
+_MID_STANCE_SHARE = 0.34
+#: Largest swing pitch knot (rad) a walker's ``swing_pitch_scale`` reaches
+#: (StrideShape accepts angles below 1.4 rad).
+MAX_SWING_PITCH_RAD = 1.35
 
 
-def _speed_stride_shape(rng: np.random.Generator, speed: float, gait: Gait) -> StrideShape:
+def _speed_stride_shape(
+    rng: np.random.Generator, speed: float, gait: Gait, walker: StanceMotion | None = None
+) -> StrideShape:
     """A realistic stride at ``speed`` m/s: cycle from the speed (SpeedRouteConfig),
-    the other shape values drawn as in :func:`random_stride_shape`."""
+    the other shape values drawn as in :func:`random_stride_shape`.
+
+    A ``walker`` with a ``flat_fraction`` sets the shares of a walking cycle
+    (:meth:`StanceMotion.cycle_fractions`; the drawn stance share less its mid-range
+    0.34 is the stride's jitter) and scales the swing's pitch knots by its
+    ``swing_pitch_scale`` (at most :data:`MAX_SWING_PITCH_RAD`). The draws from
+    ``rng`` are the same with or without a walker."""
     if gait is Gait.RUN:
         cycle, stance_frac, height, toe_off, heel_strike, pitch, roll = rng.uniform(
             *_RUN_BOUNDS
@@ -435,9 +448,17 @@ def _speed_stride_shape(rng: np.random.Generator, speed: float, gait: Gait) -> S
     else:
         jitter, a, d_height, d_toe_off, pitch, roll = rng.uniform(*_WALK_BOUNDS).tolist()
         cycle = jitter / (0.55 + 0.3 * speed)
-        t0, t1, t2, t3 = a * cycle, (0.5 - a) * cycle, a * cycle, (0.5 - a) * cycle
+        if walker is None or walker.flat_fraction is None:
+            t0, t1, t2, t3 = a * cycle, (0.5 - a) * cycle, a * cycle, (0.5 - a) * cycle
+        else:
+            flat, heel, swing = walker.cycle_fractions(speed, a - _MID_STANCE_SHARE)
+            t0, t1, t2, t3 = flat * cycle, heel * cycle, swing * cycle, heel * cycle
         height = 0.06 + 0.04 * speed + d_height
         toe_off, heel_strike = 0.4 + 0.3 * speed + d_toe_off, -(0.2 + 0.1 * speed)
+    if walker is not None and walker.swing_pitch_scale != 1.0:
+        k, top = walker.swing_pitch_scale, MAX_SWING_PITCH_RAD
+        toe_off, heel_strike = min(k * toe_off, top), max(k * heel_strike, -top)
+        pitch = min(max(k * pitch, -top), top)
     return StrideShape._drawn(
         stride_length_m=speed * cycle,
         stance_s=t0,
@@ -475,7 +496,8 @@ def speed_route(rng: np.random.Generator, config: SpeedRouteConfig | None = None
         for i in range(n_leg):
             v = leg_speed * (1.0 + cfg.speed_jitter * rng.uniform(-1.0, 1.0))
             v = min(max(v, lo), hi)
-            shape = _speed_stride_shape(rng, v, gait_for_speed(v, cfg.run_from_mps))
+            gait = gait_for_speed(v, cfg.run_from_mps)
+            shape = _speed_stride_shape(rng, v, gait, cfg.stance_motion)
             turn = turn_total / n_turn if i < n_turn else 0.0
             s = Stride(shape, heading_change=turn, stop_s=stop if i == 0 else 0.0)
             if elapsed + shape.cycle_s + s.stop_s > target and strides:

@@ -43,6 +43,9 @@ Array = NDArray[np.float64]
 MICRO_W = (2 * math.pi * 7.0, 2 * math.pi * 10.0)
 #: Columns of the per-stance parameter table (:func:`stance_table`).
 COLUMNS = ("quiet_rad", "edge_rad", "tau_hs_s", "tau_ho_s", "roll_rad", "roll_fraction")
+#: Bounds of a walking cycle's shares (:meth:`StanceMotion.cycle_fractions`).
+MIN_FLAT = 0.05
+MIN_SWING = 0.2
 
 
 @dataclass(frozen=True)
@@ -60,6 +63,10 @@ class StanceMotion:
     roll_fraction: float = 0.3
     stance_spread_log10: float = 0.2
     seed: int = 0
+    flat_fraction: float | None = None
+    flat_speed_slope: float = 0.0
+    heel_fraction: float = 0.16
+    swing_pitch_scale: float = 1.0
 
     def __post_init__(self) -> None:
         for name in ("quiet_rad", "edge_rad", "roll_rad", "stance_spread_log10"):
@@ -78,6 +85,39 @@ class StanceMotion:
             v = getattr(self, name)
             if not (math.isfinite(v) and -4 <= v <= 4):
                 raise ValueError(f"StanceMotion.{name} must be in [−4, 4], got {v!r}")
+        if self.flat_fraction is not None and not (
+            math.isfinite(self.flat_fraction) and 0.05 <= self.flat_fraction <= 0.7
+        ):
+            raise ValueError(
+                f"StanceMotion.flat_fraction must be in [0.05, 0.7] or None, "
+                f"got {self.flat_fraction!r}"
+            )
+        if not (math.isfinite(self.flat_speed_slope) and abs(self.flat_speed_slope) <= 0.5):
+            raise ValueError(
+                f"StanceMotion.flat_speed_slope must be in [−0.5, 0.5], "
+                f"got {self.flat_speed_slope!r}"
+            )
+        if not (0.03 <= self.heel_fraction <= 0.25):
+            raise ValueError(
+                f"StanceMotion.heel_fraction must be in [0.03, 0.25], got {self.heel_fraction!r}"
+            )
+        if not (math.isfinite(self.swing_pitch_scale) and 0.25 <= self.swing_pitch_scale <= 4):
+            raise ValueError(
+                f"StanceMotion.swing_pitch_scale must be in [0.25, 4], "
+                f"got {self.swing_pitch_scale!r}"
+            )
+
+    def cycle_fractions(self, speed_mps: float, jitter: float = 0.0) -> tuple[float, float, float]:
+        """Shares of a walking cycle at ``speed_mps`` (m/s): (foot flat, each of heel-off
+        and heel-strike, swing). Foot flat is ``flat_fraction + flat_speed_slope ·
+        ln v + jitter``, kept in [:data:`MIN_FLAT`, 1 − 2·heel − :data:`MIN_SWING`];
+        swing is the rest. Requires ``flat_fraction``."""
+        if self.flat_fraction is None:
+            raise ValueError("StanceMotion.cycle_fractions needs flat_fraction")
+        heel = self.heel_fraction
+        flat = self.flat_fraction + self.flat_speed_slope * math.log(max(speed_mps, 1e-3))
+        flat = min(max(flat + jitter, MIN_FLAT), 1.0 - 2.0 * heel - MIN_SWING)
+        return flat, heel, 1.0 - flat - 2.0 * heel
 
 
 def stance_table(motion: StanceMotion, speed_mps: Array) -> Array:
@@ -158,12 +198,23 @@ class StanceRandomization:
     roll_speed_exponent: float = 1.0
     roll_fraction: float = 0.3
     stance_spread_log10: float = 0.2
+    flat_fraction: float | None = None
+    flat_fraction_std: float = 0.0
+    flat_speed_slope: float = 0.0
+    heel_fraction: float = 0.16
+    swing_pitch_scale: float = 1.0
+    swing_pitch_log10_std: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("quiet_log10_std", "edge_log10_std"):
+        for name in ("quiet_log10_std", "edge_log10_std", "swing_pitch_log10_std"):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0 <= v <= 2):
                 raise ValueError(f"StanceRandomization.{name} must be in [0, 2], got {v!r}")
+        if not (math.isfinite(self.flat_fraction_std) and 0 <= self.flat_fraction_std <= 0.3):
+            raise ValueError(
+                "StanceRandomization.flat_fraction_std must be in [0, 0.3], "
+                f"got {self.flat_fraction_std!r}"
+            )
         for name in ("quiet_log10_mean", "edge_log10_mean"):
             v = getattr(self, name)
             if not (math.isfinite(v) and -7 <= v <= -0.5):
@@ -208,4 +259,20 @@ class StanceRandomization:
             roll_fraction=self.roll_fraction,
             stance_spread_log10=self.stance_spread_log10,
             seed=int(rng.integers(2**31)),
+            **self._draw_gait(rng),
         )
+
+    def _draw_gait(self, rng: np.random.Generator) -> dict[str, float | None]:
+        """The walker's gait timing and swing vigour; two more normal draws from
+        ``rng`` only when ``flat_fraction`` is set (else the route's own timing)."""
+        if self.flat_fraction is None:
+            return {}
+        z_flat, z_swing = rng.standard_normal(2)
+        flat = self.flat_fraction + self.flat_fraction_std * z_flat
+        scale = self.swing_pitch_scale * 10.0 ** (self.swing_pitch_log10_std * z_swing)
+        return {
+            "flat_fraction": float(min(max(flat, MIN_FLAT), 0.7)),
+            "flat_speed_slope": self.flat_speed_slope,
+            "heel_fraction": self.heel_fraction,
+            "swing_pitch_scale": float(min(max(scale, 0.25), 4.0)),
+        }

@@ -1,0 +1,268 @@
+"""Fit the calibrated foot simulator to recorded walks: CMA-ES on a distance
+between summary statistics (``benchmarks/calibrate_foot.py``, docs/SIM_TO_REAL.md).
+
+The parameters (:data:`PARAMETERS`) are those of the distribution over
+walkers :class:`pednav_env.gait.stance_motion.StanceRandomization`: the
+mid-stance quiet amplitude (log10 mean and spread over walkers, speed
+exponent), the edge amplitude (the same), the heel-strike and heel-off time
+constants, the roll-over amplitude, the walker's foot-flat share of the
+walking cycle (mean at 1 m/s, spread over walkers, change per unit ln speed),
+the heel-off/heel-strike share, and the swing vigour (log10 mean and spread of
+the scale of the swing's pitch knots). The IMU grade is the recordings'
+(``microstrain_gx5``).
+
+The distance (:func:`band_distance`), per speed band holding recordings,
+weighted by the band's share of the recordings and summed: the
+1-Wasserstein distances (W1) between the recordings' and the simulated walks'
+values of
+
+- p10, p50 and p90 of log10 SHOE (decades): mid-stance quietness, the
+  stance/swing edge, swing vigour;
+- the quiet share of the walking time and the median quiet-run length
+  (:mod:`pednav_env.calibration.stats`; divided by 0.1 and 0.1 s, so that a
+  tenth of the cycle weighs as a decade);
+
+plus half the W1 between the pooled log10 SHOE samples. These are
+distributions over walks, not the coverage check of ``pednav sim2real``
+(whether each recording lies inside the 5–95 % envelope), which is measured
+afterwards on other simulated walks (other seeds, longer walks).
+
+The simulated walks of a fit use the same seeds at every evaluation (common
+random numbers), so the distance is a deterministic function of the
+parameters.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import cma
+import numpy as np
+from numpy.typing import NDArray
+from scipy.stats import wasserstein_distance
+
+from pednav_env.calibration.compare import SPEED_BANDS, SimModel, band_of
+from pednav_env.calibration.stats import WalkStats
+from pednav_env.gait.stance_motion import StanceRandomization
+
+Array = NDArray[np.float64]
+
+#: The recordings' IMU grade, used in every fit.
+GRADE = "microstrain_gx5"
+#: Simulated walks in a fit are shorter than sim2real's (s; the cost of a fit).
+FIT_DURATION_S = (20.0, 30.0)
+#: Scales of the per-walk statistics in the distance (module docstring).
+STAT_SCALES = {
+    "log_shoe_p10": 1.0,
+    "log_shoe_p50": 1.0,
+    "log_shoe_p90": 1.0,
+    "quiet_fraction": 0.1,
+    "quiet_s_median": 0.1,
+}
+#: Weight of the pooled log10 SHOE W1.
+POOLED_WEIGHT = 0.5
+#: Probabilities at which the pooled W1 compares quantile functions.
+_POOLED_P = (np.arange(400) + 0.5) / 400
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One fitted value: its name, start point and box (the fit's units)."""
+
+    name: str
+    start: float
+    lower: float
+    upper: float
+
+
+#: The fitted values in vector order. Start points: today's stance timing
+#: (foot flat 0.34 of the cycle, heel-off and heel-strike 0.16 each, unscaled
+#: swing) and round guesses for the stance dynamics, not a previous fit.
+PARAMETERS = (
+    Parameter("quiet_log10_mean", -2.5, -4.5, -1.2),
+    Parameter("quiet_log10_std", 0.3, 0.02, 1.0),
+    Parameter("quiet_speed_exponent", 0.5, -1.0, 3.0),
+    Parameter("edge_log10_mean", -2.0, -4.0, -0.8),
+    Parameter("edge_log10_std", 0.2, 0.02, 1.0),
+    Parameter("edge_speed_exponent", 1.0, -1.0, 3.0),
+    Parameter("log10_tau_hs_s", -1.4, -2.0, -0.7),
+    Parameter("log10_tau_ho_s", -1.4, -2.0, -0.7),
+    Parameter("log10_roll_rad", -2.0, -4.0, -0.8),
+    Parameter("flat_fraction", 0.34, 0.15, 0.6),
+    Parameter("flat_fraction_std", 0.03, 0.0, 0.15),
+    Parameter("flat_speed_slope", 0.0, -0.3, 0.1),
+    Parameter("heel_fraction", 0.16, 0.05, 0.2),
+    Parameter("log10_swing_pitch_scale", 0.0, -0.15, 0.35),
+    Parameter("swing_pitch_log10_std", 0.05, 0.0, 0.2),
+)
+NAMES = tuple(p.name for p in PARAMETERS)
+START = np.array([p.start for p in PARAMETERS])
+LOWER = np.array([p.lower for p in PARAMETERS])
+UPPER = np.array([p.upper for p in PARAMETERS])
+
+
+def randomization(x: Sequence[float]) -> StanceRandomization:
+    """The parameter vector (:data:`NAMES` order, clipped to the box) as a
+    StanceRandomization."""
+    x = np.clip(np.asarray(x, dtype=float), LOWER, UPPER)
+    v = dict(zip(NAMES, x.tolist(), strict=True))
+    return StanceRandomization(
+        quiet_log10_mean=v["quiet_log10_mean"],
+        quiet_log10_std=v["quiet_log10_std"],
+        quiet_speed_exponent=v["quiet_speed_exponent"],
+        edge_log10_mean=v["edge_log10_mean"],
+        edge_log10_std=v["edge_log10_std"],
+        edge_speed_exponent=v["edge_speed_exponent"],
+        tau_hs_s=10 ** v["log10_tau_hs_s"],
+        tau_ho_s=10 ** v["log10_tau_ho_s"],
+        roll_rad=10 ** v["log10_roll_rad"],
+        flat_fraction=v["flat_fraction"],
+        flat_fraction_std=v["flat_fraction_std"],
+        flat_speed_slope=v["flat_speed_slope"],
+        heel_fraction=v["heel_fraction"],
+        swing_pitch_scale=10 ** v["log10_swing_pitch_scale"],
+        swing_pitch_log10_std=v["swing_pitch_log10_std"],
+    )
+
+
+def pooled_w1(real: Array, sim: Array) -> float:
+    """W1 between two samples as the mean absolute difference of their quantile
+    functions on a 400-point grid (the integral ∫|F⁻¹ − G⁻¹| dp by the midpoint
+    rule; within 1e-3 decades of the exact value on walks, at a fraction of the
+    cost of sorting both pooled samples together)."""
+    return float(np.mean(np.abs(np.quantile(real, _POOLED_P) - np.quantile(sim, _POOLED_P))))
+
+
+def band_distance(real: Sequence[WalkStats], sim: Sequence[WalkStats]) -> dict[str, float]:
+    """The distance's terms for one band (module docstring), each already scaled."""
+    out = {}
+    for attr, scale in STAT_SCALES.items():
+        r = np.array([getattr(s, attr) for s in real])
+        m = np.array([getattr(s, attr) for s in sim])
+        r, m = r[np.isfinite(r)], m[np.isfinite(m)]
+        out[attr] = wasserstein_distance(r, m) / scale if r.size and m.size else 0.0
+    pooled_real = np.concatenate([s.log_shoe for s in real])
+    pooled_sim = np.concatenate([s.log_shoe for s in sim])
+    out["pooled_log_shoe"] = POOLED_WEIGHT * pooled_w1(pooled_real, pooled_sim)
+    return out
+
+
+def by_band(real: Sequence[WalkStats]) -> dict[int, list[WalkStats]]:
+    """Recordings by index into :data:`SPEED_BANDS` (those without a band dropped)."""
+    out: dict[int, list[WalkStats]] = {}
+    for s in real:
+        band = band_of(s.speed_mps)
+        if band is not None:
+            out.setdefault(SPEED_BANDS.index(band), []).append(s)
+    return dict(sorted(out.items()))
+
+
+def distance(
+    x: Sequence[float],
+    real: Sequence[WalkStats],
+    walks: int,
+    seed: int,
+    terms: dict[str, float] | None = None,
+) -> float:
+    """The weighted sum over bands of :func:`band_distance` (module docstring) for
+    the parameters ``x``; band k simulates ``walks`` walks from seed
+    ``seed · 100 + k``. ``terms``, if given, receives the per-term sums."""
+    model = SimModel("fit", GRADE, randomization(x))
+    bands = by_band(real)
+    total_recordings = sum(len(v) for v in bands.values())
+    total = 0.0
+    for k, rec in bands.items():
+        sim = model.simulate(SPEED_BANDS[k], walks, seed * 100 + k, FIT_DURATION_S, False)
+        weight = len(rec) / total_recordings
+        for name, value in band_distance(rec, sim).items():
+            total += weight * value
+            if terms is not None:
+                terms[name] = terms.get(name, 0.0) + weight * value
+    return float(total)
+
+
+@dataclass
+class FitResult:
+    """The best parameters, their distance, and the best distance after each
+    generation (the convergence record)."""
+
+    x: Array
+    distance: float
+    evaluations: int
+    cpu_s: float
+    stop: dict[str, float]
+    best_by_generation: list[float] = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        return {
+            "x": [round(float(v), 5) for v in self.x],
+            "distance": round(self.distance, 5),
+            "evaluations": self.evaluations,
+            "generations": len(self.best_by_generation),
+            "cpu_s": round(self.cpu_s, 1),
+            "stop": {k: float(v) for k, v in self.stop.items()},
+            "best_by_generation": [round(v, 5) for v in self.best_by_generation],
+        }
+
+
+def fit(
+    real: Sequence[WalkStats],
+    walks: int,
+    max_evaluations: int,
+    seed: int,
+    popsize: int = 12,
+    progress: Callable[[int, float], None] | None = None,
+) -> FitResult:
+    """CMA-ES (Hansen's ``cma``) in the box scaled to [0, 1]^n from
+    :data:`START`, σ₀ = 0.2, until ``max_evaluations`` or its own convergence
+    tests (a best-distance change below 1e-3 over the recent generations)."""
+    if not real:
+        raise ValueError("fit: no recordings with a walking speed in a band")
+    scale = UPPER - LOWER
+    es = cma.CMAEvolutionStrategy(
+        (START - LOWER) / scale,
+        0.2,
+        {
+            "bounds": [0.0, 1.0],
+            "popsize": popsize,
+            "maxfevals": max_evaluations,
+            "tolfun": 1e-3,
+            "tolfunhist": 1e-3,
+            "seed": seed + 1,
+            "verbose": -9,
+        },
+    )
+    t0 = time.process_time()
+    history: list[float] = []
+    while not es.stop():
+        zs = es.ask()
+        es.tell(zs, [distance(LOWER + scale * np.asarray(z), real, walks, seed) for z in zs])
+        history.append(float(es.result.fbest))
+        if progress is not None:
+            progress(len(history), history[-1])
+    x = LOWER + scale * np.asarray(es.result.xbest)
+    return FitResult(
+        x,
+        float(es.result.fbest),
+        int(es.result.evaluations),
+        time.process_time() - t0,
+        dict(es.stop()),
+        history,
+    )
+
+
+def groups(stats: Sequence[WalkStats]) -> dict[str, list[WalkStats]]:
+    """The cross-validation groups: PyShoe trials before 11:35 and after (two
+    sessions of one day; file names ``2017-11-22-HH-MM-SS``) and the hallway walks
+    (another walker, place and day)."""
+    out: dict[str, list[WalkStats]] = {"pyshoe_early": [], "pyshoe_late": [], "hallway": []}
+    for s in stats:
+        if s.name.startswith("2017-") and len(s.name) >= 16:
+            hhmm = s.name[11:13] + s.name[14:16]
+            out["pyshoe_early" if hhmm < "1135" else "pyshoe_late"].append(s)
+        else:
+            out["hallway"].append(s)
+    return out
+
