@@ -60,7 +60,9 @@ def check(stats: list[WalkStats], x: np.ndarray) -> dict:
     """``pednav sim2real``'s comparison of ``stats`` with the model ``x``: coverage,
     p10-only coverage, the largest envelope excess, and the distance of the fit
     (its terms) measured on the check's walks."""
-    report = compare(stats, SimModel("calibrated", GRADE, randomization(x)), CHECK_WALKS, CHECK_SEED)
+    report = compare(
+        stats, SimModel("calibrated", GRADE, randomization(x)), CHECK_WALKS, CHECK_SEED
+    )
     covered, total = report.coverage
     p10 = sum(
         b.p10_envelope[0] <= s.log_shoe_p10 <= b.p10_envelope[1]

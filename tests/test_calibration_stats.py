@@ -96,6 +96,31 @@ def test_walk_stats_from_labels_hand_computed() -> None:
     assert st.stance_accel_dev_median == pytest.approx(np.zeros(4), abs=1e-12)
 
 
+def test_quiet_phase_of_the_hand_walk() -> None:
+    # The quiet level is the log-midpoint of p10 (stance, |ω| = 0.1) and p50 (swing,
+    # |ω| = 3): |ω|² = 0.3 in SHOE's gyro units. A stance sample whose 5-sample window
+    # holds one swing sample reads (9 + 4·0.01)/5 = 1.8 > 0.3: not quiet. So each of
+    # the 4 walking stances has its 80 − 4 pure samples quiet (as for p10 above).
+    omega_b, f_b, stance, pos = _hand_walk()
+    s = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos))
+    pure = STANCE - 4
+    walking = STRIDES * SWING + (STRIDES - 1) * STANCE
+    assert s.quiet_fraction == pytest.approx((STRIDES - 1) * pure / walking)
+    assert s.quiet_runs_s == pytest.approx(np.full(STRIDES - 1, pure / RATE))
+    assert s.quiet_s_median == pytest.approx(pure / RATE)
+    # p90 is a pure swing sample (swing holds 600 − 4·4 of the 920)
+    assert s.log_shoe_p90 == pytest.approx(2 * math.log10(W_SWING / SHOE_GYRO_SIGMA), abs=1e-9)
+
+
+def test_walk_stats_without_strides_keeps_the_walk_measures() -> None:
+    omega_b, f_b, stance, pos = _hand_walk()
+    samples = WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos)
+    full, light = walk_stats(samples), walk_stats(samples, per_stride=False)
+    assert light.strides.count == 0 and full.strides.count == STRIDES - 1
+    assert np.array_equal(light.log_shoe, full.log_shoe)
+    assert light.speed_mps == full.speed_mps and light.quiet_fraction == full.quiet_fraction
+
+
 def test_walk_stats_from_truth_velocity_without_labels() -> None:
     omega_b, f_b, _, pos = _hand_walk()
     s = walk_stats(WalkSamples(omega_b, f_b, RATE, truth_pos=pos))

@@ -28,10 +28,10 @@ from scipy.stats import wasserstein_distance
 
 from pednav_env.calibration.sources import samples_from_simulation
 from pednav_env.calibration.stats import WalkStats, walk_stats
-from pednav_env.gait.foot import FootSimConfig, simulate_foot
+from pednav_env.gait.foot import FootSimConfig, FootTrajectory, simulate_foot
 from pednav_env.gait.foot_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
-from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
+from pednav_env.sensors.imu import IMU_GRADES, ImuMeasurements, simulate_imu
 
 #: Speed bands (m/s), lower bound included.
 SPEED_BANDS = ((0.3, 0.8), (0.8, 1.3), (1.3, 1.8), (1.8, 2.6), (2.6, math.inf))
@@ -73,6 +73,29 @@ class SimModel:
         if self.imu_grade not in IMU_GRADES:
             raise ValueError(f"unknown IMU grade {self.imu_grade!r}; known: {sorted(IMU_GRADES)}")
 
+    def batch(
+        self,
+        speed_mps: tuple[float, float],
+        walks: int,
+        seed: int,
+        duration_s: tuple[float, float] = SIM_DURATION_S,
+    ) -> tuple[FootTrajectory, ImuMeasurements]:
+        """``walks`` simulated walks with every stride's speed in ``speed_mps``,
+        ``duration_s`` long, truth and IMU readings; walk i draws from
+        ``default_rng([seed, i])`` (its walker, route and IMU errors)."""
+        rngs = [np.random.default_rng([seed, i]) for i in range(walks)]
+        routes = []
+        for rng in rngs:
+            motion = None if self.stance is None else self.stance.draw(rng)
+            cfg = SpeedRouteConfig(speed_mps=speed_mps, duration_s=duration_s, stance_motion=motion)
+            routes.append(speed_route(rng, cfg))
+        truth = simulate_foot(routes, FootSimConfig(rate_hz=SIM_RATE_HZ), full_state=False)
+        spec = IMU_GRADES[self.imu_grade]()
+        imu = simulate_imu(
+            truth.omega_b, truth.f_b, SIM_RATE_HZ, spec, rngs, gait_step_index=truth.gait_step
+        )
+        return truth, imu
+
     def simulate(
         self,
         band: tuple[float, float],
@@ -81,22 +104,11 @@ class SimModel:
         duration_s: tuple[float, float] = SIM_DURATION_S,
         per_stride: bool = True,
     ) -> list[WalkStats]:
-        """``walks`` simulated walks at the band's speeds, ``duration_s`` long; walk i
-        draws from ``default_rng([seed, i])``. ``per_stride`` as in
+        """The statistics of :meth:`batch`'s walks at the band's speeds (the open band
+        up to :data:`SIM_TOP_SPEED_MPS`). ``per_stride`` as in
         :func:`pednav_env.calibration.stats.walk_stats`."""
         lo, hi = band
-        speeds = (lo, min(hi, SIM_TOP_SPEED_MPS))
-        rngs = [np.random.default_rng([seed, i]) for i in range(walks)]
-        routes = []
-        for rng in rngs:
-            motion = None if self.stance is None else self.stance.draw(rng)
-            cfg = SpeedRouteConfig(speed_mps=speeds, duration_s=duration_s, stance_motion=motion)
-            routes.append(speed_route(rng, cfg))
-        truth = simulate_foot(routes, FootSimConfig(rate_hz=SIM_RATE_HZ), full_state=False)
-        spec = IMU_GRADES[self.imu_grade]()
-        imu = simulate_imu(
-            truth.omega_b, truth.f_b, SIM_RATE_HZ, spec, rngs, gait_step_index=truth.gait_step
-        )
+        truth, imu = self.batch((lo, min(hi, SIM_TOP_SPEED_MPS)), walks, seed, duration_s)
         return [
             walk_stats(samples_from_simulation(truth, imu, i, f"{self.name}{i}"), per_stride)
             for i in range(walks)

@@ -265,4 +265,3 @@ def groups(stats: Sequence[WalkStats]) -> dict[str, list[WalkStats]]:
         else:
             out["hallway"].append(s)
     return out
-

@@ -7,7 +7,10 @@
   ``timestamps``, ``strideIndex``, ``GCP``; footprint truth at footfalls) or
   anything :func:`pednav_env.io.load_recording` reads;
 - :func:`samples_from_simulation` — one lane of a simulated walk (truth stance
-  and positions, IMU readings with errors).
+  and positions, IMU readings with errors);
+- :func:`recording_from_simulation` — the same lane as a
+  :class:`pednav_env.io.Recording` (IMU readings and truth positions), for the
+  real-data filter runner (``pednav run``'s).
 """
 
 from __future__ import annotations
@@ -100,4 +103,21 @@ def samples_from_simulation(
         name=name or f"sim{lane}",
         stance=traj.stance[lane, :end],
         truth_pos=traj.pos_n[lane, :end],
+    )
+
+
+def recording_from_simulation(
+    traj: FootTrajectory, imu: ImuMeasurements, lane: int, name: str | None = None
+) -> Recording:
+    """Lane ``lane`` of a simulated batch as a recording, cut at the walk's own end:
+    sample k at the end of its interval, (k + 1)/rate, with the truth position there
+    (the layout of ``pednav simulate``'s CSV files)."""
+    end = min(int(round(traj.duration_s[lane] * traj.rate_hz)), traj.num_samples)
+    return Recording(
+        time=traj.t[1 : end + 1],
+        omega_b=imu.omega_b[lane, :end],
+        f_b=imu.f_b[lane, :end],
+        truth_pos=traj.pos_n[lane, 1 : end + 1],
+        name=name or f"sim{lane}",
+        metadata={"format": "simulation"},
     )

@@ -95,6 +95,12 @@ def default_families() -> list[Family]:
     return fams
 
 
+def shoe_families() -> list[Family]:
+    """The SHOE families of :func:`default_families` (PyShoe's detector and units;
+    threshold γ, process and ZUPT noise scales; both update modes)."""
+    return [f for f in default_families() if f.name.startswith("shoe/")]
+
+
 #: Stage-2 factors around the stage-1 winner: thresholds and noise scales.
 REFINE_THRESHOLD = (0.5, 0.75, 1.0, 1.5)
 REFINE_SCALE = (0.1, 0.3, 1.0, 3.0)

@@ -1,0 +1,87 @@
+"""The calibration fit's objective (pednav_env.calibration.fit) and simulated
+walks as recordings for the real-data runner (agents.choose_shoe)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import wasserstein_distance
+
+from agents.choose_shoe import armse_by_recording, simulated_recordings
+from pednav_env.calibration.compare import MODELS, SimModel
+from pednav_env.calibration.fit import (
+    GRADE,
+    NAMES,
+    START,
+    band_distance,
+    distance,
+    groups,
+    pooled_w1,
+    randomization,
+)
+from pednav_env.replay.setup import real_fixed_setup
+
+
+def test_pooled_w1_matches_scipy() -> None:
+    rng = np.random.default_rng(0)
+    a = rng.normal(6.0, 1.0, 20_000)
+    b = np.concatenate((rng.normal(5.5, 0.5, 8_000), rng.normal(9.0, 0.4, 15_000)))
+    # the 400-point midpoint rule is within 1e-2 decades of the exact W1 for
+    # samples of this spread (its error is the quantile function's variation within
+    # one 1/400 step, largest in the tails); a wrong sign or scale is off by ≥ 0.5
+    assert pooled_w1(a, b) == pytest.approx(wasserstein_distance(a, b), abs=1e-2)
+
+
+def test_groups_split_by_session_and_place() -> None:
+    class Named:
+        def __init__(self, name: str) -> None:
+            self.name = name
+
+    walks = [Named(n) for n in ("2017-11-22-11-30-14", "2017-11-22-11-35-59", "Data_31_LLIO")]
+    out = groups(walks)  # type: ignore[arg-type]
+    assert [[w.name for w in v] for v in out.values()] == [
+        ["2017-11-22-11-30-14"],
+        ["2017-11-22-11-35-59"],
+        ["Data_31_LLIO"],
+    ]
+
+
+@pytest.fixture(scope="module")
+def pseudo_recordings() -> list:
+    """Simulated walks of the start point's model standing in for recordings (two
+    bands, other seeds than the fit's)."""
+    model = SimModel("truth", GRADE, randomization(START))
+    return model.simulate((0.8, 1.3), 4, 99, (20.0, 25.0), False) + model.simulate(
+        (1.3, 1.8), 4, 98, (20.0, 25.0), False
+    )
+
+
+def test_band_distance_of_a_set_with_itself_is_zero(pseudo_recordings: list) -> None:
+    terms = band_distance(pseudo_recordings, pseudo_recordings)
+    assert set(terms) >= {"log_shoe_p10", "log_shoe_p50", "quiet_fraction", "pooled_log_shoe"}
+    assert all(v == pytest.approx(0.0, abs=1e-12) for v in terms.values())
+
+
+def test_distance_is_deterministic_and_smallest_at_the_generating_model(
+    pseudo_recordings: list,
+) -> None:
+    at_truth = distance(START, pseudo_recordings, 4, 7)
+    assert distance(START, pseudo_recordings, 4, 7) == at_truth  # common random numbers
+    for name, step in (("quiet_log10_mean", 1.0), ("flat_fraction", 0.15)):
+        x = START.copy()
+        x[NAMES.index(name)] += step
+        # a decade louder mid-stance, or 15 % of the cycle more foot-flat, moves p10 or
+        # the quiet share far beyond the spread of 4 walks against 4 others
+        assert distance(x, pseudo_recordings, 4, 7) > 2 * at_truth
+
+
+def test_simulated_walk_as_recording_runs_through_the_real_data_filter() -> None:
+    recs = simulated_recordings(MODELS["calibrated"], 1, 3, (0.8, 1.3), (20.0, 20.0))
+    rec = recs[0]
+    assert rec.time[0] == pytest.approx(1 / 200.0) and np.all(np.diff(rec.time) > 0)
+    assert rec.truth_pos is not None and np.allclose(rec.truth_pos[:300], 0.0, atol=1e-9)
+    # real-fixed on a 20 s simulated walk at about 1 m/s: decimetres of error when the
+    # axes, time and truth are passed right; a wrong rate, axis or truth sample
+    # gives metres
+    armse = armse_by_recording(real_fixed_setup(), recs)[rec.name]
+    assert armse < 0.5
