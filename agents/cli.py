@@ -616,7 +616,7 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from pednav_env.calibration.compare import MODELS, compare
-    from pednav_env.calibration.sources import load_walk
+    from pednav_env.calibration.sources import distinct_walks, load_walk
     from pednav_env.calibration.stats import walk_stats
     from pednav_env.io import find_recordings
 
@@ -628,7 +628,13 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
         paths.extend(find_recordings(p) if p.is_dir() else [p])
     if not paths:
         raise ValueError(f"no recordings (.csv, .mat) in {' '.join(args.recordings)}")
-    real = [walk_stats(load_walk(p)) for p in paths]
+    walks, dropped = distinct_walks([load_walk(p) for p in paths])
+    for copy, kept in dropped:
+        print(
+            f"{copy}: the same walk as {kept} (footprints and duration); counted once",
+            file=sys.stderr,
+        )
+    real = [walk_stats(w) for w in walks]
     report = compare(real, MODELS[args.model], args.walks, args.seed)
     if args.plot is not None:
         from pednav_env.calibration.plots import write_figures

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pednav_env.calibration.sources import load_walk
+from pednav_env.calibration.sources import distinct_walks, load_walk
 from pednav_env.calibration.stats import (
     SHOE_ACCEL_SIGMA,
     SHOE_GYRO_SIGMA,
@@ -25,6 +25,7 @@ RATE = 200.0
 STAND, SWING, STANCE, STRIDES = 400, 120, 80, 5
 W_STANCE, W_SWING, W_STAND = 0.1, 3.0, 0.001  # |ω| (rad/s) in each phase
 PYSHOE_SAMPLE = Path(__file__).parent / "data" / "replay" / "pyshoe_2017-11-22-11-48-35_first7s.mat"
+HALLWAY_SAMPLE = Path(__file__).parent / "data" / "hallway" / "SensorConnectData_31_first9s_LLIO.mat"
 
 
 def _hand_walk() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -176,3 +177,37 @@ def test_pyshoe_excerpt_uses_vicon_labels_and_truth() -> None:
 def test_load_walk_missing_file() -> None:
     with pytest.raises(ValueError, match="no such file"):
         load_walk("/nonexistent/walk.mat")
+
+
+def test_hallway_excerpt_has_footprint_speed_and_detector_stance() -> None:
+    s = walk_stats(load_walk(HALLWAY_SAMPLE))
+    assert s.stance_source is StanceSource.DETECTOR
+    assert s.speed_source is SpeedSource.FOOTPRINTS
+    # the walk's first seconds: footprints 0.6–1.4 m apart at about 1 m/s
+    assert 0.5 < s.speed_mps < 2.0
+
+
+def _copy(name: str, rate: float, footprints: np.ndarray, seconds: float = 2.0) -> WalkSamples:
+    n = int(seconds * rate)
+    return WalkSamples(
+        np.zeros((n, 3)),
+        np.zeros((n, 3)),
+        rate,
+        name=name,
+        footfall_index=np.array([0, n // 2]),
+        footprints_m=footprints,
+    )
+
+
+def test_distinct_walks_counts_a_walk_in_two_files_once() -> None:
+    fp = np.array([[0.0, 0.0], [0.6, 0.1]])
+    walks = [
+        _copy("walk.csv at 250 Hz", 250.0, fp),
+        _copy("walk.mat", 200.0, fp + 2e-4),  # the same footprints to 1 mm
+        _copy("other", 200.0, fp + 0.5),
+        _copy("walk, longer", 200.0, fp, seconds=2.5),
+    ]
+    kept, dropped = distinct_walks(walks)
+    # the copy at the SHOE window's 200 Hz is kept, in the place of the first
+    assert [w.name for w in kept] == ["walk.mat", "other", "walk, longer"]
+    assert dropped == [("walk.csv at 250 Hz", "walk.mat")]

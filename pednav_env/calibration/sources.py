@@ -2,10 +2,10 @@
 
 - :func:`samples_from_recording` — a :class:`pednav_env.io.Recording`
   (stance labels from ``metadata["reference_stance"]`` when the loader found
-  them, e.g. PyShoe's ``zv_vicon_opt``; truth positions if any);
-- :func:`load_walk` — a file: the hallway ``.mat`` layout (``imu_data``,
-  ``timestamps``, ``strideIndex``, ``GCP``; footprint truth at footfalls) or
-  anything :func:`pednav_env.io.load_recording` reads;
+  them, e.g. PyShoe's ``zv_vicon_opt``; truth positions if any; footprints
+  if any, e.g. the hallway walks' ground control points);
+- :func:`load_walk` — a file, through :func:`pednav_env.io.load_recording`
+  (every format ``pednav run`` reads, footprints found as it finds them);
 - :func:`samples_from_simulation` — one lane of a simulated walk (truth stance
   and positions, IMU readings with errors);
 - :func:`recording_from_simulation` — the same lane as a
@@ -18,22 +18,18 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import scipy.io
 
 from pednav_env.calibration.stats import WalkSamples
 from pednav_env.gait.foot import FootTrajectory
 from pednav_env.io import Recording, load_recording
 from pednav_env.sensors.imu import ImuMeasurements
 
-#: Variables of the hallway ``.mat`` layout.
-HALLWAY_KEYS = ("imu_data", "timestamps", "strideIndex", "GCP")
-
 
 def samples_from_recording(rec: Recording) -> WalkSamples:
-    """The recording's samples, labels and truth (rate from the median interval)."""
+    """The recording's samples, labels, truth and footprints (rate from the median
+    interval)."""
     stance = rec.metadata.get("reference_stance")
-    foot_idx = rec.metadata.get("footfall_index")
-    footprints = rec.metadata.get("footprints_m")
+    fp = rec.footprints
     return WalkSamples(
         omega_b=rec.omega_b,
         f_b=rec.f_b,
@@ -41,31 +37,8 @@ def samples_from_recording(rec: Recording) -> WalkSamples:
         name=rec.name,
         stance=None if stance is None else np.asarray(stance, dtype=bool),
         truth_pos=rec.truth_pos if rec.has_truth else None,
-        footfall_index=None if foot_idx is None else np.asarray(foot_idx, dtype=np.int64),
-        footprints_m=None if footprints is None else np.asarray(footprints, dtype=float),
-    )
-
-
-def _hallway_samples(path: Path, data: dict) -> WalkSamples:
-    """The hallway layout: accelerometer then gyroscope (m/s², rad/s), footprints."""
-    imu = np.asarray(data["imu_data"], dtype=float)
-    t = np.asarray(data["timestamps"], dtype=float).ravel()
-    idx = np.asarray(data["strideIndex"]).ravel().astype(np.int64)
-    gcp = np.asarray(data["GCP"], dtype=float)
-    if imu.ndim != 2 or imu.shape[1] != 6 or imu.shape[0] != t.size:
-        raise ValueError(f"{path.name}: 'imu_data' must be {t.size}×6, got {imu.shape}")
-    if gcp.shape != (idx.size, 2):
-        raise ValueError(f"{path.name}: 'GCP' must be {idx.size}×2, got {gcp.shape}")
-    if not np.isfinite(imu).all():
-        row = int(np.flatnonzero(~np.isfinite(imu).all(axis=1))[0])
-        raise ValueError(f"{path.name}: 'imu_data' has a non-finite value at sample {row}")
-    return WalkSamples(
-        omega_b=imu[:, 3:6],
-        f_b=imu[:, 0:3],
-        rate_hz=float(1.0 / np.median(np.diff(t))),
-        name=path.stem,
-        footfall_index=idx,
-        footprints_m=gcp,
+        footfall_index=None if fp is None else np.asarray(fp.sample, dtype=np.int64),
+        footprints_m=None if fp is None else np.asarray(fp.pos, dtype=float),
     )
 
 
@@ -80,14 +53,42 @@ def load_walk(path: str | Path) -> WalkSamples:
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: no such file")
-    if path.suffix.lower() == ".mat":
-        try:
-            data = scipy.io.loadmat(path)
-        except (OSError, ValueError, NotImplementedError) as exc:
-            raise ValueError(f"{path.name}: not a readable MATLAB file ({exc})") from None
-        if all(k in data for k in HALLWAY_KEYS):
-            return _hallway_samples(path, data)
     return samples_from_recording(load_recording(path))
+
+
+def same_walk(a: WalkSamples, b: WalkSamples) -> bool:
+    """Whether ``a`` and ``b`` are one walk in two files (e.g. a hallway walk's
+    ``.mat`` and its SensorConnect CSV): the same footprints (to 1 mm) and
+    durations within 0.1 s. Walks without footprints are never the same."""
+    if a.footprints_m is None or b.footprints_m is None:
+        return False
+    if a.footprints_m.shape != b.footprints_m.shape:
+        return False
+    dur_a, dur_b = len(a.omega_b) / a.rate_hz, len(b.omega_b) / b.rate_hz
+    return abs(dur_a - dur_b) < 0.1 and bool(
+        np.allclose(a.footprints_m, b.footprints_m, rtol=0.0, atol=1e-3)
+    )
+
+
+def distinct_walks(
+    walks: list[WalkSamples], rate_hz: float = 200.0
+) -> tuple[list[WalkSamples], list[tuple[str, str]]]:
+    """``walks`` with each walk once (:func:`same_walk`): of copies, the one sampled
+    nearest ``rate_hz`` (the SHOE window's rate; within 1 % of each other, the
+    first). Returns the kept
+    walks in their order and (dropped, kept) name pairs."""
+    kept: list[WalkSamples] = []
+    dropped: list[tuple[str, str]] = []
+    for w in walks:
+        twin = next((i for i, k in enumerate(kept) if same_walk(k, w)), None)
+        if twin is None:
+            kept.append(w)
+        elif abs(w.rate_hz - rate_hz) < abs(kept[twin].rate_hz - rate_hz) - 0.01 * rate_hz:
+            dropped.append((kept[twin].name, w.name))
+            kept[twin] = w
+        else:
+            dropped.append((w.name, kept[twin].name))
+    return kept, dropped
 
 
 def samples_from_simulation(
