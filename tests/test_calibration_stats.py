@@ -24,8 +24,9 @@ from pednav_env.constants import STANDARD_GRAVITY
 RATE = 200.0
 STAND, SWING, STANCE, STRIDES = 400, 120, 80, 5
 W_STANCE, W_SWING, W_STAND = 0.1, 3.0, 0.001  # |ω| (rad/s) in each phase
-PYSHOE_SAMPLE = Path(__file__).parent / "data" / "replay" / "pyshoe_2017-11-22-11-48-35_first7s.mat"
-HALLWAY_SAMPLE = Path(__file__).parent / "data" / "hallway" / "SensorConnectData_31_first9s_LLIO.mat"
+TEST_DATA = Path(__file__).parent / "data"
+PYSHOE_SAMPLE = TEST_DATA / "replay" / "pyshoe_2017-11-22-11-48-35_first7s.mat"
+HALLWAY_SAMPLE = TEST_DATA / "hallway" / "SensorConnectData_31_first9s_LLIO.mat"
 
 
 def _hand_walk() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
