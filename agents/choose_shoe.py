@@ -23,14 +23,18 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from pednav_env.calibration.compare import MODELS, SimModel
 from pednav_env.calibration.sources import recording_from_simulation
 from pednav_env.io import Recording
-from pednav_env.replay.metrics import track_errors
+from pednav_env.nav.detectors import ShoeDetectorConfig
+from pednav_env.replay.metrics import footprint_errors, track_errors
 from pednav_env.replay.runner import prepare, run_prepared
 from pednav_env.replay.search import search, shoe_families
 from pednav_env.replay.setup import RealFilterSetup
+
+Array = NDArray[np.float64]
 
 #: Speeds (m/s) of the simulated strides.
 SIM_SPEED_MPS = (0.3, 3.0)
@@ -64,16 +68,43 @@ def choose_on_simulation(
     return search(recordings, shoe_families())
 
 
-def armse_by_recording(setup: RealFilterSetup, recordings: Sequence[Recording]) -> dict[str, float]:
-    """PyShoe's ARMSE (m) of ``setup`` on each recording with truth (inf if the
-    filter diverged)."""
-    out = {}
-    for rec in recordings:
-        prep = prepare(rec, setup)
-        run = run_prepared(prep, 1)
-        out[rec.name] = (
-            np.inf
-            if run.diverged[0]
-            else float(track_errors(run.pos[0], prep.truth_pos, prep.n_align)["armse_pyshoe_m"])
-        )
+def lane_errors(recording: Recording, setup: RealFilterSetup, knobs: dict[str, Array]) -> Array:
+    """The error of each lane of ``knobs`` (name → (N,) values) on ``recording``
+    (m): PyShoe's ARMSE against its truth, else the mean footprint error
+    (:func:`pednav_env.replay.metrics.footprint_errors`); inf where the filter
+    diverged."""
+    n = len(next(iter(knobs.values()))) if knobs else 1
+    prep = prepare(recording, setup)
+    if prep.truth_pos is None and prep.footprints is None:
+        raise ValueError(f"{recording.name}: no truth and no footprints to score against")
+    run = run_prepared(prep, n, knobs=knobs)
+    out = np.full(n, np.inf)
+    for j in range(n):
+        if run.diverged[j]:
+            continue
+        if prep.truth_pos is not None:
+            out[j] = track_errors(run.pos[j], prep.truth_pos, prep.n_align)["armse_pyshoe_m"]
+        else:
+            fp = prep.footprints
+            out[j] = footprint_errors(run.pos[j][fp.sample], fp.pos)["footprint_mean_error_m"]
     return out
+
+
+def errors_by_recording(
+    setup: RealFilterSetup, recordings: Sequence[Recording]
+) -> dict[str, float]:
+    """:func:`lane_errors` of ``setup`` alone on each recording (m)."""
+    return {rec.name: float(lane_errors(rec, setup, {})[0]) for rec in recordings}
+
+
+def threshold_sweep(
+    setup: RealFilterSetup, recordings: Sequence[Recording], thresholds: Sequence[float]
+) -> Array:
+    """(recordings, thresholds) errors of ``setup`` with each SHOE threshold γ (its
+    other values kept): the search for the best single γ."""
+    if not isinstance(setup.filter.detector, ShoeDetectorConfig):
+        raise ValueError("threshold_sweep needs a SHOE detector setup")
+    knobs = {"shoe_threshold": np.asarray(thresholds, dtype=float)}
+    for name in ("process_noise_scale", "zupt_noise_scale"):
+        knobs[name] = np.full(len(thresholds), getattr(setup.filter, name))
+    return np.array([lane_errors(rec, setup, knobs) for rec in recordings])

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.stats import wasserstein_distance
 
-from agents.choose_shoe import armse_by_recording, simulated_recordings
+from agents.choose_shoe import errors_by_recording, simulated_recordings
 from pednav_env.calibration.compare import MODELS, SimModel
 from pednav_env.calibration.fit import (
     GRADE,
@@ -83,5 +83,5 @@ def test_simulated_walk_as_recording_runs_through_the_real_data_filter() -> None
     # real-fixed on a 20 s simulated walk at about 1 m/s: decimetres of error when the
     # axes, time and truth are passed right; a wrong rate, axis or truth sample
     # gives metres
-    armse = armse_by_recording(real_fixed_setup(), recs)[rec.name]
+    armse = errors_by_recording(real_fixed_setup(), recs)[rec.name]
     assert armse < 0.5

@@ -98,6 +98,18 @@ def test_walk_stats_from_labels_hand_computed() -> None:
     assert st.stance_accel_dev_median == pytest.approx(np.zeros(4), abs=1e-12)
 
 
+def test_a_stand_split_by_a_label_flicker_is_still_a_stand() -> None:
+    omega_b, f_b, stance, pos = _hand_walk()
+    flicker = stance.copy()
+    flicker[STAND // 2] = False  # one sample in the middle of the first 2 s stand
+    whole = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos))
+    split = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=flicker, truth_pos=pos))
+    # without cleaning the two 1 s halves are stands, but the flickered sample would
+    # be walking; with it the stand is whole and the walking part unchanged
+    assert split.standing_s == whole.standing_s
+    assert np.array_equal(split.log_shoe, whole.log_shoe)
+
+
 def test_quiet_phase_of_the_hand_walk() -> None:
     # The quiet level is the log-midpoint of p10 (stance, |ω| = 0.1) and p50 (swing,
     # |ω| = 3): |ω|² = 0.3 in SHOE's gyro units. A stance sample whose 5-sample window
