@@ -39,6 +39,9 @@ SPEED_BANDS = ((0.3, 0.8), (0.8, 1.3), (1.3, 1.8), (1.8, 2.6), (2.6, math.inf))
 SIM_TOP_SPEED_MPS = 3.8
 #: Envelope quantiles over simulated walks (%).
 ENVELOPE_PERCENT = (5.0, 95.0)
+#: Per-walk shape measures reported beside the envelopes (medians over walks):
+#: quiet share of the walking time, median quiet run (s), p90 of log10 SHOE.
+WALK_SHAPE = ("quiet_fraction", "quiet_s_median", "log_shoe_p90")
 #: Simulated walks are this long (s) before their stands, at this rate (Hz).
 SIM_DURATION_S = (30.0, 60.0)
 SIM_RATE_HZ = 200.0
@@ -168,9 +171,24 @@ class BandComparison:
             "sim_p50_envelope": [r3(x) for x in self.p50_envelope],
             "sim_stance_s_median": r3(_median_of(self.sim, "stance_s")),
             "real_stance_s_median": r3(_median_of(self.real, "stance_s")),
+            **{
+                f"{side}_{attr}_median": r3(_walk_median(walks, attr))
+                for attr in WALK_SHAPE
+                for side, walks in (("real", self.real), ("sim", self.sim))
+            },
             "envelope_excess_decades": r3(self.excess_width()),
             "wasserstein_log_shoe": r3(self.distance()),
         }
+
+
+def _cell(value: float | None) -> str:
+    return "  -  " if value is None else f"{value:5.2f}"
+
+
+def _walk_median(stats: Sequence[WalkStats], attr: str) -> float | None:
+    values = np.array([getattr(s, attr) for s in stats], dtype=float)
+    values = values[np.isfinite(values)]
+    return float(np.median(values)) if values.size else None
 
 
 def _median_of(stats: Sequence[WalkStats], stride_attr: str) -> float | None:
@@ -229,6 +247,14 @@ class Sim2RealReport:
         covered, total = self.coverage
         if total:
             lines.append(f"covered: {covered}/{total} recordings ({100 * covered / total:.0f} %)")
+        lines.append("medians over walks, real / sim: quiet share, quiet run (s), p90")
+        for b in self.bands:
+            if b.real:
+                cells = [
+                    " / ".join(_cell(_walk_median(side, a)) for side in (b.real, b.sim))
+                    for a in WALK_SHAPE
+                ]
+                lines.append(f"{band_label(b.band):10s}  " + "   ".join(cells))
         for s in self.unbanded:
             lines.append(f"{s.name}: no walking speed in a band (speed source {s.speed_source})")
         return "\n".join(lines)
