@@ -656,8 +656,8 @@ def _add_sim2real(sub: argparse._SubParsersAction) -> None:
     s2r.add_argument(
         "--walks",
         type=_positive_int,
-        default=20,
-        help="simulated walks per speed band (default 20)",
+        default=60,
+        help="simulated walks per speed band (default 60)",
     )
     s2r.add_argument("--seed", type=int, default=0, help="simulation seed (default 0)")
     s2r.add_argument("--json", action="store_true", help="print one JSON object")

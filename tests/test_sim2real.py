@@ -11,7 +11,13 @@ import numpy as np
 import pytest
 
 from agents.cli import main
-from pednav_env.calibration.compare import MODELS, Sim2RealReport, band_of, compare
+from pednav_env.calibration.compare import (
+    DEFAULT_WALKS_PER_BAND,
+    MODELS,
+    Sim2RealReport,
+    band_of,
+    compare,
+)
 from pednav_env.calibration.sources import load_walk
 from pednav_env.calibration.stats import walk_stats
 from pednav_env.gait.foot import FootSimConfig, simulate_foot
@@ -176,6 +182,13 @@ def test_calibrated_envelope_covers_development_recordings() -> None:
     # 3 of 4. (p50 is not yet covered: docs/SIM_TO_REAL.md, "What is left".)
     assert _p10_inside(today) <= 1
     assert _p10_inside(calibrated) >= 3
+
+
+def test_cli_sim2real_default_walks_is_the_library_default() -> None:
+    from agents.cli import build_parser
+
+    args = build_parser().parse_args(["sim2real", "walk.mat"])
+    assert args.walks == DEFAULT_WALKS_PER_BAND
 
 
 def test_cli_sim2real_json(capsys: pytest.CaptureFixture[str]) -> None:

@@ -37,6 +37,9 @@ from pednav_env.sensors.imu import IMU_GRADES, ImuMeasurements, simulate_imu
 SPEED_BANDS = ((0.3, 0.8), (0.8, 1.3), (1.3, 1.8), (1.8, 2.6), (2.6, math.inf))
 #: Fastest simulated speed (m/s), the top of the open band.
 SIM_TOP_SPEED_MPS = 3.8
+#: Simulated walks per band by default: the 5–95 % envelope of 20 walks moved a
+#: recording count by ±5 of 31 between seeds; of 60 by ±2 (docs/SIM_TO_REAL.md).
+DEFAULT_WALKS_PER_BAND = 60
 #: Envelope quantiles over simulated walks (%).
 ENVELOPE_PERCENT = (5.0, 95.0)
 #: Per-walk shape measures reported beside the envelopes (medians over walks):
@@ -261,7 +264,10 @@ class Sim2RealReport:
 
 
 def compare(
-    real: Sequence[WalkStats], model: SimModel, walks_per_band: int = 20, seed: int = 0
+    real: Sequence[WalkStats],
+    model: SimModel,
+    walks_per_band: int = DEFAULT_WALKS_PER_BAND,
+    seed: int = 0,
 ) -> Sim2RealReport:
     """Recordings beside ``walks_per_band`` simulated walks per band (module docstring).
 
