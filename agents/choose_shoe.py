@@ -59,13 +59,34 @@ def simulated_recordings(
     ]
 
 
+def standing_still_armse(recordings: Sequence[Recording], setup: RealFilterSetup) -> Array:
+    """PyShoe's ARMSE (m) of a track that stays at its start, per recording: what
+    not navigating scores, the cap of a configuration's score on a walk."""
+    out = []
+    for rec in recordings:
+        prep = prepare(rec, setup)
+        still = np.zeros_like(prep.truth_pos)
+        out.append(track_errors(still, prep.truth_pos, prep.n_align)["armse_pyshoe_m"])
+    return np.array(out)
+
+
 def choose_on_simulation(
     model: SimModel | None = None, walks: int = 24, seed: int = 0
 ) -> dict[str, Any]:
     """The SHOE search on ``walks`` simulated walks of ``model`` (default: the
-    calibrated one); :func:`pednav_env.replay.search.search`'s result."""
+    calibrated one); :func:`pednav_env.replay.search.search`'s result, with each
+    walk's score capped at :func:`standing_still_armse` (a configuration that
+    diverges on a walk, or does worse than standing still, scores as standing
+    still there: one hopeless walk does not make every mean infinite) and the
+    caps under ``"standing_still_armse_m"``."""
     recordings = simulated_recordings(model or MODELS["calibrated"], walks, seed)
-    return search(recordings, shoe_families())
+    families = shoe_families()
+    cap = standing_still_armse(recordings, families[0].setup)
+    result = search(recordings, families, cap)
+    result["standing_still_armse_m"] = dict(
+        zip([r.name for r in recordings], cap.tolist(), strict=True)
+    )
+    return result
 
 
 def lane_errors(recording: Recording, setup: RealFilterSetup, knobs: dict[str, Array]) -> Array:

@@ -105,6 +105,7 @@ def main() -> None:
             "stages": search["stages"],
             "folds": search["folds"],
             "per_walk_armse_pyshoe_m": search["per_trial_armse_pyshoe_m"],
+            "standing_still_armse_m": search["standing_still_armse_m"],
             "cpu_s": round(cpu_search, 1),
         },
         "pyshoe_dev": {

@@ -288,7 +288,7 @@ def test_search_refines_until_the_winner_is_inside_its_grid(monkeypatch):
 
     best = {"shoe_threshold": 7e7, "process_noise_scale": 0.004, "zupt_noise_scale": 2.0}
 
-    def bowl(recordings, family):
+    def bowl(recordings, family, cap=None):
         lanes = family.lanes()
         d = [sum(math.log(ln[k] / best[k]) ** 2 for k in best) for ln in lanes]
         return np.tile(np.array(d), (len(recordings), 1))
@@ -308,3 +308,36 @@ def test_search_refines_until_the_winner_is_inside_its_grid(monkeypatch):
     assert not search_mod.on_edge(by_name[fam], chosen)
     for k in best:  # within one grid step of the optimum
         assert abs(math.log(chosen[k] / best[k])) < math.log(3.5)
+
+
+def test_search_scores_capped_per_recording(monkeypatch):
+    """With ``cap``, a lane that diverges on a recording scores that recording's cap
+    (not inf), and no score exceeds it; without, diverged lanes are inf."""
+    from types import SimpleNamespace
+
+    from pednav_env.replay import search as search_mod
+
+    def prepare(rec, setup):
+        return SimpleNamespace(name=rec, truth_pos=None, n_align=0)
+
+    def run_prepared(prep, n, knobs):
+        lanes = knobs["shoe_threshold"]
+        diverged = np.full(n, prep.name == "hopeless")
+        return SimpleNamespace(diverged=diverged, pos=np.zeros((n, 1, 3)), lanes=lanes)
+
+    errors = iter(np.linspace(0.5, 12.0, 54))  # the "good" walk's 54 lanes, up to 12 m
+
+    def track_errors(pos, truth, start):
+        return {"armse_pyshoe_m": float(next(errors))}
+
+    monkeypatch.setattr(search_mod, "prepare", prepare)
+    monkeypatch.setattr(search_mod, "run_prepared", run_prepared)
+    monkeypatch.setattr(search_mod, "track_errors", track_errors)
+    fam = search_mod.shoe_families()[0]
+    capped = search_mod.score_family(["good", "hopeless"], fam, cap=np.array([10.0, 7.0]))
+    assert capped.shape == (2, 54)
+    assert capped[0].max() == 10.0 and capped[0].min() == 0.5  # errors above 10 m capped
+    assert np.all(capped[1] == 7.0)
+    errors = iter(np.linspace(0.5, 12.0, 54))
+    plain = search_mod.score_family(["good", "hopeless"], fam)
+    assert plain[0].max() == 12.0 and np.all(np.isinf(plain[1]))

@@ -224,22 +224,28 @@ class StanceRandomization:
 
     @classmethod
     def calibrated(cls) -> StanceRandomization:
-        """The values fitted to the 31 development recordings (CMA-ES, 10
-        generations of 8, ``benchmarks/calibrate_foot.py``; docs/SIM_TO_REAL.md),
+        """The values fitted to the 31 development recordings (CMA-ES, 84
+        generations of 12, ``benchmarks/calibrate_foot.py``; docs/SIM_TO_REAL.md),
         rounded to 3 digits."""
         return cls(
-            quiet_log10_mean=-3.18,
-            quiet_log10_std=0.314,
-            quiet_speed_exponent=0.575,
-            edge_log10_mean=-2.18,
-            edge_log10_std=0.2,
-            edge_speed_exponent=1.10,
-            tau_hs_s=0.0749,
-            tau_ho_s=0.131,
-            roll_rad=0.0514,
+            quiet_log10_mean=-2.34,
+            quiet_log10_std=0.216,
+            quiet_speed_exponent=0.951,
+            edge_log10_mean=-2.88,
+            edge_log10_std=0.411,
+            edge_speed_exponent=3.43,
+            tau_hs_s=0.115,
+            tau_ho_s=0.0835,
+            roll_rad=0.00049,
             roll_speed_exponent=1.0,
             roll_fraction=0.3,
             stance_spread_log10=0.2,
+            flat_fraction=0.295,
+            flat_fraction_std=0.0494,
+            flat_speed_slope=-0.045,
+            heel_fraction=0.199,
+            swing_pitch_scale=1.36,
+            swing_pitch_log10_std=0.079,
         )
 
     def draw(self, rng: np.random.Generator) -> StanceMotion:

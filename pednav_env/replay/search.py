@@ -127,8 +127,11 @@ def on_edge(family: Family, lane: dict[str, float]) -> bool:
     return any(lane[k] in (min(v), max(v)) for k, v in family.grid.items())
 
 
-def score_family(recordings: Sequence[Recording], family: Family) -> np.ndarray:
-    """``armse_pyshoe_m`` per (recording, lane); diverged lanes get +inf."""
+def score_family(
+    recordings: Sequence[Recording], family: Family, cap: np.ndarray | None = None
+) -> np.ndarray:
+    """``armse_pyshoe_m`` per (recording, lane); diverged lanes get +inf, or the
+    recording's ``cap`` (m) when given (every score is then at most its cap)."""
     lanes = family.lanes()
     knobs = {k: np.array([ln[k] for ln in lanes]) for k in family.grid}
     out = np.full((len(recordings), len(lanes)), np.inf)
@@ -138,6 +141,8 @@ def score_family(recordings: Sequence[Recording], family: Family) -> np.ndarray:
         for j in range(len(lanes)):
             if not run.diverged[j]:
                 out[i, j] = track_errors(run.pos[j], prep.truth_pos, prep.n_align)["armse_pyshoe_m"]
+    if cap is not None:
+        out = np.minimum(out, np.asarray(cap, dtype=float)[:, None])
     return out
 
 
@@ -175,6 +180,7 @@ def select(
     by_name: dict[str, Family],
     stage1: Sequence[str],
     rows: np.ndarray,
+    cap: np.ndarray | None = None,
 ) -> tuple[str, int, float, list[dict[str, Any]]]:
     """Choose on recordings ``rows``: stage 1 over the families ``stage1``, then
     refinements around the winner while it sits on the edge of the newest grid.
@@ -190,7 +196,7 @@ def select(
             break
         refined = refine_family(by_name[fam], by_name[fam].lanes()[lane], stage)
         if refined.name not in scores:
-            scores[refined.name] = score_family(recordings, refined)
+            scores[refined.name] = score_family(recordings, refined, cap)
             by_name[refined.name] = refined
         candidates.append(refined.name)
         fam, lane, mean = choose({n: scores[n] for n in candidates}, rows)
@@ -201,20 +207,23 @@ def select(
 
 
 def search(
-    recordings: Sequence[Recording], families: Sequence[Family] | None = None
+    recordings: Sequence[Recording],
+    families: Sequence[Family] | None = None,
+    cap: np.ndarray | None = None,
 ) -> dict[str, Any]:
     """Run the search; returns the chosen setup, its stages, the fold check and the
-    best configurations."""
+    best configurations. ``cap`` (m, one per recording): the most a recording's
+    score counts (:func:`score_family`); None for the ``real-fixed`` search."""
     families = list(families or default_families())
-    scores = {f.name: score_family(recordings, f) for f in families}
+    scores = {f.name: score_family(recordings, f, cap) for f in families}
     by_name = {f.name: f for f in families}
     stage1 = [f.name for f in families]
     n = len(recordings)
     all_rows = np.arange(n)
-    fam, lane, mean, stages = select(recordings, scores, by_name, stage1, all_rows)
+    fam, lane, mean, stages = select(recordings, scores, by_name, stage1, all_rows, cap)
     folds = []
     for a, b in ((all_rows[0::2], all_rows[1::2]), (all_rows[1::2], all_rows[0::2])):
-        fa, la, ma, fold_stages = select(recordings, scores, by_name, stage1, a)
+        fa, la, ma, fold_stages = select(recordings, scores, by_name, stage1, a, cap)
         folds.append(
             {
                 "select_on": [recordings[i].name for i in a],
