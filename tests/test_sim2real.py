@@ -175,13 +175,16 @@ def test_calibrated_envelope_covers_development_recordings() -> None:
     paths = [DATA / "pyshoe-vicon-dev" / n for n in names]
     paths.append(DATA / "hallway-gcp-dev" / "SensorConnectData_43_LLIO.mat")
     real = [walk_stats(load_walk(p)) for p in paths]
-    today = compare(real, MODELS["today"], walks_per_band=10, seed=0)
-    calibrated = compare(real, MODELS["calibrated"], walks_per_band=10, seed=0)
-    # a slow, a normal and a fast PyShoe trial and a fast hallway walk. Mid-stance
-    # quietness (p10): today's model covers at most one, the calibrated one at least
-    # 3 of 4. (p50 is not yet covered: docs/SIM_TO_REAL.md, "What is left".)
-    assert _p10_inside(today) <= 1
+    today = compare(real, MODELS["today"], walks_per_band=20, seed=0)
+    calibrated = compare(real, MODELS["calibrated"], walks_per_band=20, seed=0)
+    # a slow (0.42 m/s), a normal and a fast PyShoe trial and a fast hallway walk.
+    # Today's model covers none (slow mid-stance a decade too quiet, p50 too low at
+    # speed). The calibrated one has all four p10 inside and covers (p10 and p50) at
+    # least 2: on seeds 0-2 it covers 3, 3, 2 (20 walks per band); the slow trial's
+    # p50 lies below the envelope (docs/SIM_TO_REAL.md, "What is left").
+    assert today.coverage[0] == 0 and _p10_inside(today) <= 1
     assert _p10_inside(calibrated) >= 3
+    assert calibrated.coverage[0] >= 2
 
 
 def test_cli_sim2real_default_walks_is_the_library_default() -> None:
