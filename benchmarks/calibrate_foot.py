@@ -6,7 +6,8 @@ The parameters, the distance and the optimiser are those of
 
 - ``all``: a fit on all recordings (the shipped
   ``StanceRandomization.calibrated()``), then ``pednav sim2real``'s check on them
-  (20 walks per band, seed 0: walks the fit never saw);
+  (60 walks per band, seed 0, and the coverage for seeds 1 and 2: walks the fit
+  never saw);
 - ``pyshoe_early``, ``pyshoe_late``, ``hallway``: the three groups (the PyShoe
   trials before 11:35 and after, two sessions of one day; the hallway walks,
   another walker, place and day). Each fits on the two other groups and reports
@@ -24,8 +25,8 @@ The four parts are independent; run them in one process or split over several
     PYTHONPATH=. .venv/bin/python benchmarks/calibrate_foot.py \\
         --merge /tmp/a.json /tmp/b.json --out benchmarks/results/calibrate_foot.json
 
-About 8–10 min of CPU per part with the defaults (900 evaluations of 10 walks of
-20–30 s in each band holding recordings).
+About 4–6 min of CPU per part with the defaults (1000 evaluations of 8 walks of
+20–30 s in each band holding recordings), and 1 min for its checks.
 """
 
 from __future__ import annotations

@@ -18,10 +18,18 @@ feet are quietest; docs/SIM_TO_REAL.md). Over each moving stance
   ρ of the stance, u = (t − (t_e − ρ d))/(ρ d).
 
 Amplitudes scale with the stride speed v (m/s): Q = Q₁ v^p_q, E = E₁ v^p_e,
-A_r = A₁ v^p_r. One :class:`StanceMotion` per walk (the walker's values; see
-:mod:`pednav_env.gait.stance_randomization` for the distribution over
-walkers); each stance multiplies Q and E by 10^(σ_s ξ), ξ standard normal
-drawn from ``seed`` (stance-to-stance variation).
+A_r = A₁ v^p_r. One :class:`StanceMotion` per walk (the walker's values;
+:class:`StanceRandomization` is the distribution over walkers); each stance
+multiplies Q and E by 10^(σ_s ξ), ξ standard normal drawn from ``seed``
+(stance-to-stance variation).
+
+A walker also has a gait timing and a swing vigour, used by
+:func:`pednav_env.gait.foot_route.speed_route` when ``flat_fraction`` is set
+(:meth:`StanceMotion.cycle_fractions`): the walking cycle is split into foot
+flat f = f₁ + β ln v (plus the stride's jitter), heel-off and heel strike h
+each, and swing 1 − f − 2h; the swing's pitch knots are scaled by
+``swing_pitch_scale``. Without ``flat_fraction`` the route keeps its own
+timing (paper 003's symmetric T₀ = T₂, T₁ = T₃).
 
 These functions are compiled into :mod:`pednav_env.gait.foot_kernels`, whose
 numba cache checks that module's file only: after editing this one, delete
