@@ -23,7 +23,7 @@ east-north-up, body x forward / y left / z up, [ψ, θ, γ] of
     ψ_ours = π/2 + ψ_paper,  θ_ours = ϑ,  γ_ours = γ,
 
 under which the paper's eq (9) becomes :func:`pednav_env.rotations.body_rates_from_euler`
-and its matrix B(ψ, ϑ, γ) becomes C_nbᵀ (verified in ``tests/test_robot.py``).
+and its matrix B(ψ, ϑ, γ) becomes C_nbᵀ (verified in ``tests/gait/test_robot.py``).
 The robot therefore starts heading north and turns left (west, south, east).
 
 Choices where the paper is silent (docs/REPRODUCTION.md (papers 000/002/004)):

@@ -34,7 +34,7 @@ state_covariance`; the filter then advances one sample per call, about
 changed between calls (:meth:`ZuptStream.set_knobs`).
 
 Fed the samples of a recording in blocks of any size, the stream gives the
-offline run's track to rounding (tests/test_stream.py).
+offline run's track to rounding (tests/replay/test_stream.py).
 """
 
 from __future__ import annotations

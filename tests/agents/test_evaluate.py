@@ -2,11 +2,11 @@
 
 import json
 import time
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from testdata import REPLAY_DATA
 
 from agents.bench.timing import bench_native_vs_reference
 from agents.cli import main
@@ -196,9 +196,6 @@ def test_unknown_policy_in_pednav_run_lists_real_fixed():
         load("bogus", space, ENV_ID, other_names=SETUP_NAMES)
     for name in ("paper", "tuned", "adaptive", "pretrained", "real-fixed"):
         assert name in str(exc.value)
-
-
-REPLAY_DATA = Path(__file__).parent / "data" / "replay"
 
 
 def test_replay_env_evaluates_with_recordings_and_rejects_a_scenario(capsys):

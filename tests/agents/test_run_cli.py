@@ -10,10 +10,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from testdata import DATA
 
 from agents.cli import main
 
-DATA = Path(__file__).parent / "data"
 XIO = DATA / "xio_short_walk_13.5-17s.csv"
 PYSHOE = DATA / "replay" / "pyshoe_2017-11-22-11-48-35_first7s.mat"
 HALLWAY_MAT = DATA / "hallway" / "SensorConnectData_31_first9s_LLIO.mat"
@@ -263,3 +263,46 @@ def test_plot_draws_a_sparse_reference(tmp_path):
 
     write_plot(srec, run, tmp_path / "sparse.png", "real-fixed")
     assert (tmp_path / "sparse.png").stat().st_size > 1000
+
+
+def test_pednav_run_json_keys_with_truth(capsys, tmp_path):
+    plot = tmp_path / "top.png"
+    assert main(["run", str(PYSHOE), "--json", "--plot", str(plot)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out) == {
+        "duration_s",
+        "rate_hz",
+        "navigation_start_s",
+        "distance_m",
+        "final_position_m",
+        "stances",
+        "armse_m",
+        "armse_pyshoe_m",
+        "final_error_m",
+    }
+    assert out["rate_hz"] == pytest.approx(200, rel=0.01) and len(out["final_position_m"]) == 3
+    assert plot.stat().st_size > 1000
+
+
+def test_pednav_run_json_keys_without_truth_and_text(capsys):
+    assert main(["run", str(XIO), "--format", "xio", "--policy", "real-fixed", "--json"]) == 0
+    captured = capsys.readouterr()
+    out = json.loads(captured.out)
+    assert set(out) == {
+        "duration_s",
+        "rate_hz",
+        "navigation_start_s",
+        "distance_m",
+        "final_position_m",
+        "stances",
+        "loop_closure_m",
+    }
+    assert "duplicate_rows_removed" in captured.err  # issues go to stderr
+    assert main(["run", str(XIO)]) == 0
+    assert "loop closure" in capsys.readouterr().out
+
+
+def test_pednav_run_errors_are_reported(capsys):
+    assert main(["run", str(XIO), "--policy", "nonsense"]) == 2
+    assert "unknown policy" in capsys.readouterr().err
+    assert main(["run", str(XIO), "--format", "pyshoe"]) == 2

@@ -1,4 +1,4 @@
-"""Training, saved tuners, the seed split, and the tuned/adaptive baselines."""
+"""Training (agents.train), saved tuners, loading policies and the seed split."""
 
 import json
 
@@ -6,13 +6,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from agents.cli import main
 from agents.evaluate import evaluate, load_policy
 from agents.policies import load_run
 from agents.train import load_hyperparams, train
-from baselines import InnovationAdaptivePolicy, TunedFixedPolicy
 from baselines import tuned as tuned_module
-from pednav_env.envs.foot_core import OBS_FEATURES, FootZuptConfig
+from pednav_env.envs.foot_core import FootZuptConfig
 from pednav_env.gait.foot_route import RouteRandomization
 from pednav_env.seeds import TRAIN_SEED_BASE, check_evaluation_seeds, training_seed
 
@@ -135,116 +133,6 @@ def test_hyperparameter_files_and_bad_names():
         load_hyperparams("dqn", ENV_ID)
     with pytest.raises(ValueError, match="no hyperparameters"):
         load_hyperparams("ppo", "pednav/Nope-v0")
-
-
-def _mean_error_of_constant_action(action, seeds) -> float:
-    """Independent path: the scalar env, one episode per seed, the same action."""
-    env = gym.make(ENV_ID, config=SHORT)
-    errors = []
-    for seed in seeds:
-        env.reset(seed=seed)
-        total, done = 0.0, False
-        while not done:
-            _, r, term, trunc, _ = env.step(np.asarray(action, np.float32))
-            total += r
-            done = term or trunc
-        errors.append(-total)
-    return float(np.mean(errors))
-
-
-def test_tuned_search_beats_action_zero_and_saves_its_policy(tmp_path):
-    """A small CMA-ES run (4 training episodes, 3 generations of 6) finds a constant
-    action better than action 0 on its training episodes, and reports both objectives
-    as the scalar env measures them. Action 0 is the paper's filter, which loses
-    stances on fast random walks and diverges (docs/ENV_FOOT.md: 17.5 m mean error on
-    the random scenario, 62 % diverged); widening the thresholds a little already
-    roughly halves that, so the search must at least halve it."""
-    res = tuned_module.search(
-        ENV_ID, 4, episodes=4, generations=3, popsize=6, env_kwargs={"config": SHORT}
-    )
-    assert len(res["action"]) == 4 and all(-1 <= a <= 1 for a in res["action"])
-    assert res["evaluations"] == 18
-    seeds = [tuned_module.SEARCH_SEED + i for i in range(4)]
-    best = _mean_error_of_constant_action(res["action"], seeds)
-    paper = _mean_error_of_constant_action(np.zeros(4), seeds)
-    # same episodes and actions on another code path: equal up to summation order
-    assert res["objective_m"] == pytest.approx(best, rel=1e-9)
-    assert res["paper_objective_m"] == pytest.approx(paper, rel=1e-9)
-    assert best < 0.5 * paper
-    path = tuned_module.save_result(ENV_ID, res, tmp_path / "tuned.json")
-    space = gym.make(ENV_ID).action_space
-    pol = TunedFixedPolicy.from_file(path, ENV_ID, space)
-    a, _ = pol.predict(np.zeros((3, 20), np.float32))
-    np.testing.assert_allclose(a, np.tile(res["action"], (3, 1)), atol=1e-6)
-    with pytest.raises(ValueError, match="no tuned-fixed action"):
-        TunedFixedPolicy.for_env("pednav/Other-v0", space)
-    with pytest.raises(ValueError, match="no tuned-fixed action for 'pednav/Other-v0'"):
-        TunedFixedPolicy.from_file(path, "pednav/Other-v0", space)
-    (tmp_path / "bad.json").write_text("[1, 2]")
-    with pytest.raises(ValueError, match=r"bad\.json"):
-        TunedFixedPolicy.from_file(tmp_path / "bad.json", ENV_ID, space)
-
-
-def test_tune_writes_a_run_dir_and_installs_only_when_asked(tmp_path, monkeypatch, capsys):
-    """`pednav tune` leaves the shipped baseline alone unless --install; its output
-    is a policy for `pednav evaluate` (the file or its directory)."""
-    env_id = "pednav/MarkerTrack-v0"
-    installed = tmp_path / "installed.json"
-    installed.write_text(json.dumps({"pednav/FootZupt-v0": {"action": [0.0] * 4}}))
-    monkeypatch.setattr(tuned_module, "RESULTS_FILE", installed)
-    args = ["tune", env_id, "--episodes", "2", "--generations", "1", "--popsize", "2"]
-    args += ["--scenario", "paper", "--run-dir", str(tmp_path / "run")]
-    assert main(args) == 0
-    result = json.loads(capsys.readouterr().out)
-    written = tmp_path / "run" / "tuned_actions.json"
-    assert json.loads(written.read_text())[env_id] == result
-    assert set(json.loads(installed.read_text())) == {"pednav/FootZupt-v0"}  # untouched
-    env = gym.make(env_id)
-    obs = np.zeros((1, *env.observation_space.shape), np.float32)
-    for policy in (written, written.parent):
-        a, _ = load_policy(str(policy), env.action_space, env_id).predict(obs)
-        np.testing.assert_allclose(a[0], result["action"], atol=1e-6)
-    assert main([*args, "--install"]) == 0
-    capsys.readouterr()
-    table = json.loads(installed.read_text())
-    assert set(table) == {"pednav/FootZupt-v0", env_id}  # other envs' entries kept
-    assert table[env_id]["action"] == result["action"]  # same seed, same search
-
-
-def test_adaptive_rule_reacts_to_innovations_and_motion():
-    space = gym.make(ENV_ID).action_space
-    pol = InnovationAdaptivePolicy(space)
-    idx = {f.name: i for i, f in enumerate(OBS_FEATURES)}
-    obs = np.zeros((3, 20), np.float32)
-    obs[:, idx["log_nis_interval"]] = np.log1p([40.0, 4.0, 0.4])  # NIS 10x, 1x, 0.1x expected
-    obs[:, idx["gyro_norm_mean"]] = [0.05, 2.0, 6.0]  # still, walking, running
-    obs[:, idx["accel_excess_std"]] = [0.01, 5.0, 20.0]
-    a, _ = pol.predict(obs)
-    assert a[0, 2] > 0 and a[1, 2] == pytest.approx(0.0, abs=1e-6) and a[2, 2] < 0
-    assert a[0, 0] == 0.0 and a[0, 1] == 0.0  # still: paper thresholds
-    assert a[2, 0] > a[1, 0] and a[2, 1] > a[1, 1]  # faster gait: wider thresholds
-    with pytest.raises(ValueError, match="no innovation-adaptive rule"):
-        InnovationAdaptivePolicy(space, "pednav/Other-v0")
-
-
-@pytest.mark.parametrize(
-    ("env_id", "feature", "knob"),
-    [("pednav/WaistStep-v0", "log_nis_interval", 3), ("pednav/MarkerTrack-v0", "log_nis_mean", 0)],
-)
-def test_adaptive_rules_of_the_other_envs_follow_the_nis(env_id, feature, knob):
-    """Too-large innovations raise the adapted noise scale, too-small ones lower it,
-    and no update leaves it alone; all other knobs stay at the paper's values."""
-    from pednav_env.envs import marker_core, waist_config
-
-    core = waist_config if "Waist" in env_id else marker_core
-    names = [f.name if hasattr(f, "name") else f[0] for f in core.OBS_FEATURES]
-    space = gym.make(env_id).action_space
-    obs = np.zeros((3, len(names) + space.shape[0]), np.float32)
-    obs[:, names.index(feature)] = np.log1p([40.0, 0.04, 0.0])  # NIS ≫ m, ≪ m, none
-    a, _ = InnovationAdaptivePolicy(space, env_id).predict(obs)
-    assert a[0, knob] > 0 > a[1, knob] and a[2, knob] == 0
-    others = np.delete(a, knob, axis=1)
-    assert not others.any()
 
 
 def test_load_policy_names(run_dir):

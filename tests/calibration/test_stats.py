@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from testdata import HALLWAY_DATA, PYSHOE_SAMPLE
 
 from pednav_env.calibration.sources import distinct_walks, load_walk
 from pednav_env.calibration.stats import (
@@ -24,9 +24,7 @@ from pednav_env.constants import STANDARD_GRAVITY
 RATE = 200.0
 STAND, SWING, STANCE, STRIDES = 400, 120, 80, 5
 W_STANCE, W_SWING, W_STAND = 0.1, 3.0, 0.001  # |ω| (rad/s) in each phase
-TEST_DATA = Path(__file__).parent / "data"
-PYSHOE_SAMPLE = TEST_DATA / "replay" / "pyshoe_2017-11-22-11-48-35_first7s.mat"
-HALLWAY_SAMPLE = TEST_DATA / "hallway" / "SensorConnectData_31_first9s_LLIO.mat"
+HALLWAY_SAMPLE = HALLWAY_DATA / "SensorConnectData_31_first9s_LLIO.mat"
 
 
 def _hand_walk() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

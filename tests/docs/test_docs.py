@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: Folders that are not the project's own text (environments, outputs, caches).
 SKIPPED = {".venv", ".git", "runs", "build", "__pycache__", ".ruff_cache", ".pytest_cache"}
 #: Top-level folders of the repository: a path mention starting with one must resolve.

@@ -9,14 +9,15 @@ seed s + i (observations, rewards, flags and every info entry, over two episodes
 per lane); bad actions raise a ValueError naming the env; random and extreme
 actions over whole episodes stay finite and inside the observation space;
 rendering, pickling and a PPO smoke run. Env-specific behaviour (rewards against
-an independent computation, knobs, configuration errors) is in test_env_*.py.
+an independent computation, knobs, configuration errors) is in each env's own file
+beside this one (test_foot_zupt.py, test_waist_step.py, test_marker_track.py,
+test_foot_replay.py).
 """
 
 from __future__ import annotations
 
 import pickle
 import warnings
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -27,6 +28,7 @@ from gymnasium.utils.env_checker import data_equivalence
 from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
+from testdata import REPLAY_DATA
 
 import pednav_env  # noqa: F401  (registers the environments)
 from pednav_env.envs.foot_core import FootZuptConfig
@@ -41,7 +43,7 @@ FAST_KWARGS = {
     "pednav/FootZupt-v0": {
         "config": FootZuptConfig(route=RouteRandomization(duration_s=(12.0, 20.0)))
     },
-    "pednav/FootZuptReplay-v0": {"data_dir": str(Path(__file__).parent / "data" / "replay")},
+    "pednav/FootZuptReplay-v0": {"data_dir": str(REPLAY_DATA)},
     "pednav/MarkerTrack-v0": {
         "config": MarkerTrackConfig(
             duration_s=(4.0, 8.0),

@@ -1,27 +1,25 @@
 """``pednav/FootZuptReplay-v0`` on the shipped PyShoe excerpt: the FootZupt spaces, the
 episode and its return, bad data directories, and the policy-driven `pednav run` path
-replaying the same filter (the contract every env keeps is in tests/test_env_contract.py)."""
+replaying the same filter (the contract every env keeps is in tests/envs/test_env_contract.py)."""
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
 from env_rollout import rollout
+from testdata import REPLAY_DATA
 
 import pednav_env  # noqa: F401  (registers the environments)
 from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
 from pednav_env.io import load_recording
 
 ENV_ID = "pednav/FootZuptReplay-v0"
-DATA = Path(__file__).parent / "data" / "replay"
 
 
 @pytest.fixture(scope="module")
 def env():
-    e = gym.make(ENV_ID, data_dir=str(DATA))
+    e = gym.make(ENV_ID, data_dir=str(REPLAY_DATA))
     yield e
     e.close()
 
@@ -51,13 +49,13 @@ def test_bad_data_directories():
     with pytest.raises(ValueError, match="data_dir is required"):
         gym.make(ENV_ID)
     with pytest.raises(ValueError, match="not a directory"):
-        gym.make(ENV_ID, data_dir=str(DATA / "nope"))
+        gym.make(ENV_ID, data_dir=str(REPLAY_DATA / "nope"))
 
 
 def test_policy_schedule_replays_the_core_exactly():
     """`pednav run` with a policy: the knob schedule recorded in the replay core,
     replayed by the runner, gives the core's own estimate at every interval end."""
-    rec = load_recording(DATA / "pyshoe_2017-11-22-11-48-35_first7s.mat")
+    rec = load_recording(REPLAY_DATA / "pyshoe_2017-11-22-11-48-35_first7s.mat")
     core = FootReplayCore(FootReplayConfig(), 1, "test", recordings=[rec])
     core.reset_lanes(np.array([0]), [np.random.default_rng(0)])
     rng = np.random.default_rng(1)

@@ -1,7 +1,7 @@
 """``pednav/FootZupt-v0``: the return against an independent run of the engine, the
 held-error tail after termination, clipped actions, the minimum-stance knob, the paper
 scenario and configuration errors (the contract every env keeps is in
-tests/test_env_contract.py)."""
+tests/envs/test_env_contract.py)."""
 
 import warnings
 from dataclasses import replace
@@ -52,7 +52,7 @@ def test_out_of_range_actions_are_clipped_and_counted():
 
 def test_fuzz_with_the_minimum_stance_knob_over_whole_episodes():
     """The fifth knob (minimum stance, ``tune_min_stance=True``) at random and extreme
-    values; tests/test_env_contract.py fuzzes the four default knobs."""
+    values; tests/envs/test_env_contract.py fuzzes the four default knobs."""
     env = gym.make(ENV_ID, config=SHORT, tune_min_stance=True).unwrapped
     rng = np.random.default_rng(99)
     corners = np.array(np.meshgrid(*[[-1.0, 1.0]] * 5)).reshape(5, -1).T

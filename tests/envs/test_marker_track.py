@@ -1,7 +1,7 @@
 """``pednav/MarkerTrack-v0``: the return against an independent run of the EKF, the
 filterpy oracle inside the env, the UWB record, re-anchoring, clipped actions,
 divergence, the paper scenario and configuration errors (the contract every env keeps
-is in tests/test_env_contract.py)."""
+is in tests/envs/test_env_contract.py)."""
 
 import doctest
 import itertools
@@ -92,7 +92,7 @@ def test_engine_matches_filterpy_inside_the_env():
 
 def test_episode_uwb_record_is_measure_uwb_of_its_walk():
     """The env's sensor is the library's ``measure_uwb`` (one implementation;
-    tests/test_uwb.py checks it against a per-sample reference bit for bit)."""
+    tests/sensors/test_uwb.py checks it against a per-sample reference bit for bit)."""
     cfg = MarkerTrackConfig(uwb_conditions=("realistic",), uwb_condition_weights=(1.0,))
     ep = generate_episode(cfg, np.random.default_rng(3))
     k = ep.z.shape[0]

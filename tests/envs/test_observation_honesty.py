@@ -13,12 +13,12 @@ that the replacement is known to have reached the episode).
 from __future__ import annotations
 
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from testdata import REPLAY_DATA
 
 import pednav_env  # noqa: F401  (registers the environments)
 from baselines import InnovationAdaptivePolicy
@@ -33,7 +33,7 @@ FAST_KWARGS: dict[str, dict[str, Any]] = {
     "pednav/FootZupt-v0": {
         "config": FootZuptConfig(route=RouteRandomization(duration_s=(12.0, 16.0)))
     },
-    "pednav/FootZuptReplay-v0": {"data_dir": str(Path(__file__).parent / "data" / "replay")},
+    "pednav/FootZuptReplay-v0": {"data_dir": str(REPLAY_DATA)},
     "pednav/MarkerTrack-v0": {
         "config": MarkerTrackConfig(
             duration_s=(6.0, 8.0),

@@ -1,7 +1,7 @@
 """``pednav/WaistStep-v0``: the filterpy oracle, batch-size independence, divergence, the
 core's subset update, the step velocity, clipped actions, the paper scenario, episode
 variety and configuration errors (the contract every env keeps is in
-tests/test_env_contract.py)."""
+tests/envs/test_env_contract.py)."""
 
 import doctest
 

@@ -9,14 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from testdata import HALLWAY_DATA
 
 from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.io import Footprints, detect_format, find_recordings, load_recording
 
-DATA = Path(__file__).parent / "data" / "hallway"
-MAT = DATA / "SensorConnectData_31_first9s_LLIO.mat"
-CSV = DATA / "SensorConnectData_31_first5s.csv"
-FOOTPRINTS = DATA / "SensorConnectData_31_first5s_footprints.csv"
+MAT = HALLWAY_DATA / "SensorConnectData_31_first9s_LLIO.mat"
+CSV = HALLWAY_DATA / "SensorConnectData_31_first5s.csv"
+FOOTPRINTS = HALLWAY_DATA / "SensorConnectData_31_first5s_footprints.csv"
 #: g the data set used to convert the vendor's g into the .mat's m/s².
 MAT_G = 9.8029
 
@@ -172,7 +172,7 @@ def test_footprints_validation():
 
 
 def test_find_recordings_skips_footprint_files():
-    names = [p.name for p in find_recordings(DATA)]
+    names = [p.name for p in find_recordings(HALLWAY_DATA)]
     assert names == [CSV.name, MAT.name]
 
 

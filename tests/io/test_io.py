@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from testdata import DATA
 
 from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.io import (
@@ -21,7 +22,6 @@ from pednav_env.io import (
 )
 from pednav_env.io.saturation import bridge_saturated, quintic_bridge, saturation_mask
 
-DATA = Path(__file__).parent / "data"
 XIO = DATA / "xio_short_walk_13.5-17s.csv"
 PYSHOE = DATA / "replay" / "pyshoe_2017-11-22-11-48-35_first7s.mat"
 HEADER = "time,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z"

@@ -1,33 +1,20 @@
-"""Marker EKF and low-pass baseline of paper 001 (pednav_env.nav.marker_ekf)."""
+"""Marker EKF of paper 001 (pednav_env.nav.marker_ekf, marker_model, marker_run)."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest
 from filterpy.kalman import ExtendedKalmanFilter
 from scipy.stats import chi2
+from simulated import marker_walks
 
-from pednav_env.gait.heel_knee import HeelKneeConfig, simulate_heel_knee
+from pednav_env.gait.heel_knee import HeelKneeConfig
 from pednav_env.gait.heel_knee_model import HeelKneeNominal
-from pednav_env.nav.lowpass import lowpass_cutoff_for_gait, lowpass_filter, lowpass_noise_gain
 from pednav_env.nav.marker_model import MarkerEkfConfig, marker_jacobian, marker_measurement
 from pednav_env.nav.marker_run import MarkerEKF, run_marker_ekf
-from pednav_env.sensors.uwb import UwbSpec, measure_uwb
-
-
-def walker_rngs(seed: int, n: int) -> tuple[list, list]:
-    kids = [s.spawn(2) for s in np.random.SeedSequence(seed).spawn(n)]
-    return [np.random.default_rng(k[0]) for k in kids], [np.random.default_rng(k[1]) for k in kids]
-
-
-def scenario(seed: int, n: int, k: int, gait: HeelKneeConfig, uwb: UwbSpec):
-    g_rngs, u_rngs = walker_rngs(seed, n)
-    walk = simulate_heel_knee(gait, k, g_rngs)
-    return walk, measure_uwb(uwb, walk.markers, u_rngs)
-
+from pednav_env.sensors.uwb import UwbSpec
 
 # --------------------------------------------------------------------------- model functions
 
@@ -98,7 +85,7 @@ def test_batched_ekf_equals_filterpy_step_by_step() -> None:
     gait = HeelKneeConfig(param_corr_time=300.0)
     uwb = UwbSpec.realistic()
     n, k = 3, 120
-    _, meas = scenario(21, n, k, gait, uwb)
+    _, meas = marker_walks(21, n, k, gait, uwb)
     assert not meas.valid.all() and meas.outlier.any()  # skipped rows and outliers occur
     cfg = MarkerEkfConfig.matched(gait, uwb)
     q_scale = np.array([[1.0] * 6, [0.5, 2.0, 1.0, 3.0, 0.7, 1.5], [2.0] * 6])
@@ -124,7 +111,7 @@ def test_batched_ekf_equals_filterpy_step_by_step() -> None:
 def test_walker_of_a_batch_equals_a_batch_of_one_bit_for_bit() -> None:
     gait = HeelKneeConfig(param_corr_time=100.0, initial_deviation="stationary")
     uwb = UwbSpec.realistic()
-    _, meas = scenario(22, 5, 60, gait, uwb)
+    _, meas = marker_walks(22, 5, 60, gait, uwb)
     cfg = MarkerEkfConfig.matched(gait, uwb)
     q = np.array([1.0, 2.0, 0.5, 1.0, 3.0])
     r = np.array([1.0, 0.5, 2.0, 1.0, 1.5])
@@ -224,7 +211,7 @@ def test_filter_is_statistically_consistent_in_a_mildly_nonlinear_regime() -> No
     )
     uwb = UwbSpec()
     n, k = 300, 100
-    walk, meas = scenario(23, n, k, gait, uwb)
+    walk, meas = marker_walks(23, n, k, gait, uwb)
     res = run_marker_ekf(MarkerEkfConfig.matched(gait, uwb), meas.z)
     # NEES from the posterior covariance: only the diagonal is stored per step,
     # so rerun the last step's full P with a filter object.
@@ -249,7 +236,7 @@ def test_ekf_beats_raw_measurements_on_the_paper_model() -> None:
     # spread of c_z and A_z (0.017 m each) plus phase error; 0.05 m is loose.
     gait = HeelKneeConfig(param_corr_time=1e4)
     uwb = UwbSpec()
-    walk, meas = scenario(24, 50, 100, gait, uwb)
+    walk, meas = marker_walks(24, 50, 100, gait, uwb)
     res = run_marker_ekf(MarkerEkfConfig.matched(gait, uwb), meas.z)
     rms = np.sqrt(np.mean((res.markers - walk.markers) ** 2, axis=(0, 1))).ravel()
     assert np.all(rms < 0.08)
@@ -305,86 +292,3 @@ def test_filter_rejects_bad_inputs() -> None:
         run_marker_ekf(MarkerEkfConfig(), np.zeros((2, 5, 4)))
     with pytest.raises(ValueError, match="sample_period"):
         MarkerEkfConfig.matched(HeelKneeConfig(sample_period=0.01), UwbSpec(rate_hz=10.0))
-
-
-# --------------------------------------------------------------------------- low-pass baseline
-
-
-def test_lowpass_noise_gain_matches_the_rc_formula() -> None:
-    # Bilinear first-order Butterworth: pole a = (1 − tan(π fc/fs)) / (1 + tan(π fc/fs)),
-    # white-noise power gain Σh² = (1 − a)/2.
-    for fc, fs in ((0.5, 10.0), (2.0, 10.0), (4.4, 10.0), (3.0, 100.0)):
-        w = math.tan(math.pi * fc / fs)
-        a = (1 - w) / (1 + w)
-        assert lowpass_noise_gain(fc, fs) == pytest.approx((1 - a) / 2, rel=1e-9)
-
-
-def test_lowpass_is_minus_3_db_at_cutoff_causal_and_starts_settled() -> None:
-    fs, fc = 100.0, 3.0
-    t = np.arange(4000) / fs
-    y = lowpass_filter(np.sin(2 * np.pi * fc * t)[None, :], fc, fs)
-    assert np.max(np.abs(y[0, 2000:])) == pytest.approx(1 / math.sqrt(2), rel=2e-3)
-    const = lowpass_filter(np.full((2, 50, 2, 2), 1.7), fc, fs)
-    np.testing.assert_allclose(const, 1.7, rtol=1e-12)
-    rng = np.random.default_rng(1)
-    x = rng.standard_normal((1, 200, 2, 2))
-    x2 = x.copy()
-    x2[:, 120:] += 5.0
-    a, b = lowpass_filter(x, fc, fs), lowpass_filter(x2, fc, fs)
-    assert np.array_equal(a[:, :120], b[:, :120]) and not np.array_equal(a[:, 120:], b[:, 120:])
-    # the zero-phase variant is not causal
-    a, b = (lowpass_filter(v, fc, fs, zero_phase=True) for v in (x, x2))
-    assert not np.array_equal(a[:, :120], b[:, :120])
-
-
-def test_lowpass_uses_held_values_for_dropped_samples() -> None:
-    x = np.random.default_rng(2).standard_normal((1, 40, 2, 2))
-    valid = np.ones((1, 40, 2), dtype=bool)
-    valid[0, 10:15, 0] = False
-    poisoned = x.copy()
-    poisoned[0, 10:15, 0] = 1e6
-    held = x.copy()
-    held[0, 10:15, 0] = x[0, 9, 0]
-    np.testing.assert_array_equal(
-        lowpass_filter(poisoned, 2.0, 10.0, valid=valid), lowpass_filter(held, 2.0, 10.0)
-    )
-
-
-def test_lowpass_cutoff_minimises_the_monte_carlo_error() -> None:
-    # The cut-off is picked from a prediction; check it against simulation at
-    # 100 Hz, where the optimum is interior: the empirical RMS at the chosen
-    # cut-off is below those at 0.6× and 1.6× it. 200 walks × 1000 samples give
-    # the RMS to ≈ 0.3 %, far below the ≥ 5 % differences this asserts.
-    nom = HeelKneeNominal()
-    fc = lowpass_cutoff_for_gait(nom, 100.0, 0.1, 10.0)
-    assert 0.5 < fc < 49.0
-    gait = HeelKneeConfig(sample_period=0.01, param_var_ratio=0.0)
-    walk, meas = scenario(25, 200, 1000, gait, UwbSpec(rate_hz=100.0))
-
-    def rms(cut: float) -> float:
-        return float(np.sqrt(np.mean((lowpass_filter(meas.z, cut, 100.0) - walk.markers) ** 2)))
-
-    best = rms(fc)
-    assert best < 0.95 * rms(0.6 * fc) and best < 0.95 * rms(1.6 * fc)
-
-
-def test_lowpass_rejects_bad_inputs() -> None:
-    z = np.zeros((1, 10, 2, 2))
-    with pytest.raises(ValueError, match="cutoff_hz"):
-        lowpass_filter(z, 5.0, 10.0)
-    with pytest.raises(ValueError, match="cutoff_hz"):
-        lowpass_filter(z, -1.0, 10.0)
-    with pytest.raises(ValueError, match="rate_hz"):
-        lowpass_filter(z, 1.0, 0.0)
-    with pytest.raises(ValueError, match="order"):
-        lowpass_filter(z, 1.0, 10.0, order=0)
-    bad = z.copy()
-    bad[0, 3, 1, 0] = np.inf
-    with pytest.raises(ValueError, match="finite"):
-        lowpass_filter(bad, 1.0, 10.0)
-    with pytest.raises(ValueError, match="valid"):
-        lowpass_filter(z, 1.0, 10.0, valid=np.ones((1, 10, 3), dtype=bool))
-    with pytest.raises(ValueError, match="duration"):
-        lowpass_cutoff_for_gait(HeelKneeNominal(), 10.0, 0.1, 0.0)
-    with pytest.raises(ValueError, match="noise_std"):
-        lowpass_cutoff_for_gait(replace(HeelKneeNominal()), 10.0, -0.1, 5.0)

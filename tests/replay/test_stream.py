@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from testdata import DATA
 
 from pednav_env.io import Recording, load_recording, to_uniform
 from pednav_env.replay.runner import prepare, run_prepared
@@ -13,7 +12,6 @@ from pednav_env.replay.setup import named_setup
 from pednav_env.replay.stream import ZuptStream
 from pednav_env.replay.track import TRACK_COLUMNS, run_states, write_track_csv
 
-DATA = Path(__file__).parent / "data"
 PYSHOE = DATA / "replay" / "pyshoe_2017-11-22-11-48-35_first7s.mat"
 HALLWAY = DATA / "hallway" / "SensorConnectData_31_first9s_LLIO.mat"
 #: Blocking changes only rounding (ZuptUkf.advance, tested there); over a few
