@@ -36,10 +36,11 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from agents.cli_recordings import add_recording_commands
+from agents.cli_types import positive_int
 from pednav_env import __version__
 
 
@@ -205,63 +206,6 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from agents.run_recording import RunOptions, format_folder, format_text, run, run_folder
-    from pednav_env.io import CsvLayout, LoadOptions
-
-    layout = None
-    if args.layout is not None or args.rate is not None:
-        layout = CsvLayout.from_json(args.layout) if args.layout is not None else CsvLayout()
-        if args.rate is not None:
-            layout = replace(layout, rate_hz=args.rate)
-    options = RunOptions(
-        fmt=args.format,
-        policy=args.policy,
-        mounting=args.mounting,
-        load=LoadOptions(
-            max_gap_s=args.max_gap,
-            saturation=args.saturation,
-            gyro_range=args.gyro_range,
-            accel_range=args.accel_range,
-            check_units=not args.no_unit_check,
-        ),
-        layout=layout,
-        footprints=None if args.footprints == "none" else args.footprints,
-    )
-    if Path(args.recording).is_dir():
-        result = run_folder(args.recording, options, args.plot, args.out)
-        print(json.dumps(result) if args.json else format_folder(result))
-        return 1 if any("error" in r for r in result["recordings"]) else 0
-    summary, rec = run(args.recording, options, args.plot, args.out)
-    if rec.issues:
-        print(rec.summary(), file=sys.stderr)
-    print(json.dumps(summary) if args.json else format_text(rec.name, summary))
-    return 0
-
-
-def _cmd_simulate(args: argparse.Namespace) -> int:
-    from pednav_env.replay.simulate import SimulateConfig, simulate_walk, write_recording_csv
-
-    config = SimulateConfig(
-        speed_mps=None if args.speed is None else tuple(args.speed),
-        gait=args.gait,
-        duration_s=args.duration,
-        rate_hz=args.rate,
-        imu_grade=args.imu,
-        stops=args.stops,
-        seed=args.seed,
-    )
-    walk = simulate_walk(config)
-    path = write_recording_csv(walk, args.out)
-    print(
-        f"wrote {path}: {walk.time[-1]:.1f} s at {config.rate_hz:g} Hz, {walk.distance_m:.1f} m, "
-        f"IMU {config.grade}, model {config.model.name}, seed {config.seed}"
-    )
-    return 0
-
-
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
     """Shows each option's default, unless its help already says it or there is none."""
 
@@ -290,7 +234,7 @@ def _add_backend_options(p: argparse.ArgumentParser, unit: str) -> None:
     )
     p.add_argument(
         "--ray-cpus",
-        type=_positive_int,
+        type=positive_int,
         default=None,
         help="CPUs of the local Ray instance (default: all of this machine's)",
     )
@@ -340,7 +284,7 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("paper", help="paper id: 000, 001, 002, 003 or 004")
     rep.add_argument(
         "--runs",
-        type=_positive_int,
+        type=positive_int,
         default=None,
         help="Monte-Carlo runs per configuration (default: the paper's)",
     )
@@ -367,7 +311,7 @@ def build_parser() -> argparse.ArgumentParser:
         "saved SB3 model (.zip, with vecnormalize.pkl beside it), or a tuned_actions.json "
         "from pednav tune (or its run directory)",
     )
-    ev.add_argument("--episodes", type=_positive_int, default=100, help="episodes per policy")
+    ev.add_argument("--episodes", type=positive_int, default=100, help="episodes per policy")
     ev.add_argument(
         "--seed",
         type=int,
@@ -384,7 +328,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ev.add_argument(
         "--lanes",
-        type=_positive_int,
+        type=positive_int,
         default=None,
         help="episodes per batch, one vector env each, the unit of a backend's work (default 128)",
     )
@@ -402,7 +346,7 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="SB3 algorithm")
     tr.add_argument(
         "--timesteps",
-        type=_positive_int,
+        type=positive_int,
         default=None,
         help="env steps (default: the hyperparameter file's n_timesteps)",
     )
@@ -416,7 +360,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="several training runs, one per seed, in RUN_DIR/ALGO_seedS",
     )
     tr.add_argument(
-        "--n-envs", type=_positive_int, default=None, help="parallel lanes (default: the file's)"
+        "--n-envs", type=positive_int, default=None, help="parallel lanes (default: the file's)"
     )
     tr.add_argument(
         "--config",
@@ -443,10 +387,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     tu.add_argument("env_id", help="e.g. pednav/FootZupt-v0")
     tu.add_argument(
-        "--episodes", type=_positive_int, default=16, help="training episodes per candidate"
+        "--episodes", type=positive_int, default=16, help="training episodes per candidate"
     )
-    tu.add_argument("--generations", type=_positive_int, default=8, help="CMA-ES generations")
-    tu.add_argument("--popsize", type=_positive_int, default=8, help="candidates per generation")
+    tu.add_argument("--generations", type=positive_int, default=8, help="CMA-ES generations")
+    tu.add_argument("--popsize", type=positive_int, default=8, help="candidates per generation")
     tu.add_argument("--seed", type=int, default=1, help="CMA-ES seed")
     tu.add_argument(
         "--run-dir",
@@ -467,7 +411,7 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("env", help="foot, waist or marker")
     be.add_argument(
         "--sizes",
-        type=_positive_int,
+        type=positive_int,
         nargs="+",
         default=None,
         help="numbers of environments (default 1 16 64 256)",
@@ -481,205 +425,8 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--json", action="store_true", help="print one JSON object (docs/CONTRACTS.md)")
     be.set_defaults(func=_cmd_bench)
 
-    ru = sub.add_parser("run", help="run the ZUPT-UKF on a recording (docs/REAL_DATA.md)")
-    ru.add_argument(
-        "recording", help="a .csv or .mat recording, or a folder of them (a summary table)"
-    )
-    ru.add_argument(
-        "--format",
-        default="auto",
-        help="auto (default: from the suffix and the content), csv, xio, sensorconnect, "
-        "pyshoe or gcp-mat",
-    )
-    ru.add_argument(
-        "--policy",
-        default="real-fixed",
-        help="real-fixed (default: the configuration chosen on real walks), paper (paper "
-        "003's filter; fails at walking speed on some sensors), a setup JSON file "
-        "(docs/REAL_DATA.md), or a policy name/path as in `pednav evaluate`",
-    )
-    ru.add_argument(
-        "--footprints",
-        metavar="FILE|none",
-        default="auto",
-        help="footprint CSV (truth at footfalls), or none; default: the file's own, or "
-        "<stem>_footprints.csv beside a SensorConnect CSV",
-    )
-    ru.add_argument("--mounting", default=None, help="auto (default), none or axes like x,-y,-z")
-    lo = ru.add_argument_group("loading (docs/REAL_DATA.md, Loading)")
-    lo.add_argument(
-        "--layout",
-        metavar="JSON|FILE",
-        default=None,
-        help='generic CSV column names and units, inline or in a file, e.g. \'{"time": "t", '
-        '"gyro_unit": "deg/s", "accel_unit": "g"}\' (keys as in CsvLayout)',
-    )
-    lo.add_argument(
-        "--rate",
-        metavar="HZ",
-        type=_positive_float,
-        default=None,
-        help="sample rate of a generic CSV without a time column",
-    )
-    lo.add_argument(
-        "--max-gap",
-        metavar="S",
-        type=_positive_float,
-        default=0.1,
-        help="longest gap in the time column accepted, s (default 0.1)",
-    )
-    lo.add_argument(
-        "--saturation",
-        choices=("flag", "bridge", "error"),
-        default="flag",
-        help="saturated samples: report (flag, default), replace by quintic bridges, or refuse",
-    )
-    lo.add_argument(
-        "--gyro-range",
-        metavar="RAD_S",
-        type=_positive_float,
-        default=None,
-        help="gyro range for the saturation check (default: detect clipping plateaus)",
-    )
-    lo.add_argument(
-        "--accel-range",
-        metavar="M_S2",
-        type=_positive_float,
-        default=None,
-        help="accelerometer range for the saturation check (default: detect plateaus)",
-    )
-    lo.add_argument(
-        "--no-unit-check",
-        action="store_true",
-        help="skip the plausibility check of the units (static |f| ≈ g, |ω| < 40 rad/s)",
-    )
-    ru.add_argument("--json", action="store_true", help="print one JSON object")
-    ru.add_argument(
-        "--plot",
-        metavar="FILE|DIR",
-        default=None,
-        help="write a top view with the truth to FILE (for a folder: DIR/<name>.png)",
-    )
-    ru.add_argument(
-        "--out",
-        metavar="FILE|DIR",
-        default=None,
-        help="write the track to FILE (CSV: time, position, velocity, attitude, stance, "
-        "covariance diagonal; for a folder: DIR/<name>_track.csv)",
-    )
-    ru.set_defaults(func=_cmd_run)
-
-    si = sub.add_parser(
-        "simulate", help="write a simulated foot walk as a CSV recording (docs/REAL_DATA.md)"
-    )
-    si.add_argument("--out", metavar="FILE", required=True, help="CSV file to write")
-    si.add_argument(
-        "--speed",
-        nargs=2,
-        metavar=("LO", "HI"),
-        type=_positive_float,
-        default=None,
-        help="range of every stride's speed, m/s (0.1…4; the gait follows from the speed; "
-        "default 0.8 1.3 unless --gait)",
-    )
-    si.add_argument(
-        "--gait",
-        choices=("slow_walk", "walk", "fast_walk", "run"),
-        default=None,
-        help="one gait class at its own speeds, instead of --speed",
-    )
-    si.add_argument(
-        "--duration", metavar="S", type=_positive_float, default=60.0, help="s (default 60)"
-    )
-    si.add_argument(
-        "--rate", metavar="HZ", type=_positive_float, default=200.0, help="Hz (default 200)"
-    )
-    si.add_argument(
-        "--imu",
-        metavar="GRADE",
-        default=None,
-        help="IMU error grade (default: the calibrated model's, microstrain_gx5)",
-    )
-    si.add_argument(
-        "--stops",
-        action=argparse.BooleanOptionalAction,
-        default=True,
-        help="stand still for 1–5 s at the start of some legs (default on)",
-    )
-    si.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    si.set_defaults(func=_cmd_simulate)
-    _add_sim2real(sub)
+    add_recording_commands(sub)
     return parser
-
-
-def _cmd_sim2real(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from pednav_env.calibration.compare import MODELS, compare
-    from pednav_env.calibration.sources import distinct_walks, load_walk
-    from pednav_env.calibration.stats import walk_stats
-    from pednav_env.io import find_recordings
-
-    if args.model not in MODELS:
-        raise ValueError(f"--model {args.model!r}: use one of {', '.join(MODELS)}")
-    paths = []
-    for item in args.recordings:
-        p = Path(item)
-        paths.extend(find_recordings(p) if p.is_dir() else [p])
-    if not paths:
-        raise ValueError(f"no recordings (.csv, .mat) in {' '.join(args.recordings)}")
-    walks, dropped = distinct_walks([load_walk(p) for p in paths])
-    for copy, kept in dropped:
-        print(
-            f"{copy}: the same walk as {kept} (footprints and duration); counted once",
-            file=sys.stderr,
-        )
-    real = [walk_stats(w) for w in walks]
-    report = compare(real, MODELS[args.model], args.walks, args.seed)
-    if args.plot is not None:
-        from pednav_env.calibration.plots import write_figures
-
-        for path in write_figures(report, args.plot):
-            print(f"wrote {path}", file=sys.stderr)
-    print(json.dumps(report.to_json()) if args.json else report.format_text())
-    return 0
-
-
-def _add_sim2real(sub: argparse._SubParsersAction) -> None:
-    s2r = sub.add_parser(
-        "sim2real", help="the foot simulator beside recorded walks (docs/SIM_TO_REAL.md)"
-    )
-    s2r.add_argument("recordings", nargs="+", help=".mat/.csv recordings or directories of them")
-    s2r.add_argument(
-        "--model", default="calibrated", help="calibrated or today (default calibrated)"
-    )
-    s2r.add_argument(
-        "--walks",
-        type=_positive_int,
-        default=60,
-        help="simulated walks per speed band (default 60)",
-    )
-    s2r.add_argument("--seed", type=int, default=0, help="simulation seed (default 0)")
-    s2r.add_argument("--json", action="store_true", help="print one JSON object")
-    s2r.add_argument("--plot", metavar="DIR", default=None, help="write histograms to DIR")
-    s2r.set_defaults(func=_cmd_sim2real)
-
-
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be ≥ 1, got {value}")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (value > 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
-    return value
 
 
 def main(argv: Sequence[str] | None = None) -> int:
