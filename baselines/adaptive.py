@@ -50,6 +50,7 @@ import numpy as np
 from gymnasium import spaces
 
 from pednav_env.envs.foot_core import ACTION_KNOBS, OBS_FEATURES
+from pednav_env.envs.spec import Knob, ObsFeature
 
 _IDX = {f.name: i for i, f in enumerate(OBS_FEATURES)}
 _K = len(OBS_FEATURES)
@@ -106,27 +107,39 @@ class InnovationAdaptivePolicy:
     def _waist(self, obs: np.ndarray) -> np.ndarray:
         from pednav_env.envs import waist_config as wc
 
-        idx = {name: i for i, (name, _, _) in enumerate(wc.OBS_FEATURES)}
-        k = len(wc.OBS_FEATURES)
-        current = obs[:, k : k + self.action_space.shape[0]]
-        a = np.zeros_like(current)  # detection and Q at the paper's values
-        log_nis = obs[:, idx["log_nis_interval"]]
-        j = next(i for i, kn in enumerate(wc.ACTION_KNOBS) if kn.name == "bm_noise_scale")
-        step = _nis_step(log_nis, 2.0, wc.ACTION_KNOBS[j].span, 0.05)
-        a[:, j] = np.where(log_nis > 0, current[:, j] + step, current[:, j])
-        return a
+        return self._follow_the_nis(
+            obs, wc.OBS_FEATURES, wc.ACTION_KNOBS, "log_nis_interval", "bm_noise_scale", 2.0, 0.05
+        )
 
     def _marker(self, obs: np.ndarray) -> np.ndarray:
         from pednav_env.envs import marker_core as mc
         from pednav_env.envs.marker_config import ACTION_KNOBS
 
-        idx = {f.name: i for i, f in enumerate(mc.OBS_FEATURES)}
-        k = len(mc.OBS_FEATURES)
+        dropped = obs[:, [f.name for f in mc.OBS_FEATURES].index("dropped_fraction")]
+        dof = 4.0 * (1.0 - dropped)
+        return self._follow_the_nis(
+            obs, mc.OBS_FEATURES, ACTION_KNOBS, "log_nis_mean", "q_amplitude_scale", dof, self.eta
+        )
+
+    def _follow_the_nis(
+        self,
+        obs: np.ndarray,
+        features: tuple[ObsFeature, ...],
+        knobs: tuple[Knob, ...],
+        nis_feature: str,
+        knob_name: str,
+        dof: np.ndarray | float,
+        eta: float,
+    ) -> np.ndarray:
+        """Knob ``knob_name`` moves by :func:`_nis_step` of observation ``nis_feature``
+        after an interval with updates (NIS > 0) and stays put without; every other
+        knob at the paper's value (action 0)."""
+        idx = {f.name: i for i, f in enumerate(features)}
+        k = len(features)
         current = obs[:, k : k + self.action_space.shape[0]]
-        a = np.zeros_like(current)  # other knobs at the thesis's values
-        log_nis = obs[:, idx["log_nis_mean"]]
-        dof = 4.0 * (1.0 - obs[:, idx["dropped_fraction"]])
-        j = next(i for i, kn in enumerate(ACTION_KNOBS) if kn.name == "q_amplitude_scale")
-        step = _nis_step(log_nis, dof, ACTION_KNOBS[j].span, self.eta)
+        a = np.zeros_like(current)
+        log_nis = obs[:, idx[nis_feature]]
+        j = next(i for i, kn in enumerate(knobs) if kn.name == knob_name)
+        step = _nis_step(log_nis, dof, knobs[j].span, eta)
         a[:, j] = np.where(log_nis > 0, current[:, j] + step, current[:, j])
         return a

@@ -40,9 +40,15 @@ def require_probability(name: str, value: Any) -> None:
         raise ValueError(f"{name} must be a probability in [0, 1], got {value!r}")
 
 
-def require_range(name: str, value: Any, *, positive: bool = False) -> None:
-    """``value`` is a pair ``(low, high)`` of finite numbers with low ≤ high
-    (and low > 0 when ``positive``)."""
+def require_range(
+    name: str,
+    value: Any,
+    *,
+    positive: bool = False,
+    within: tuple[float, float] | None = None,
+) -> None:
+    """``value`` is a pair ``(low, high)`` of finite numbers with low ≤ high (and
+    low > 0 when ``positive``; ``within[0]`` ≤ low and high ≤ ``within[1]`` when given)."""
     try:
         low, high = value
     except (TypeError, ValueError):
@@ -52,6 +58,8 @@ def require_range(name: str, value: Any, *, positive: bool = False) -> None:
     if low > high or (positive and low <= 0):
         bound = "0 < low <= high" if positive else "low <= high"
         raise ValueError(f"{name} must be a range with {bound}, got {value!r}")
+    if within is not None and not within[0] <= low <= high <= within[1]:
+        raise ValueError(f"{name} must lie within {within}, got {value!r}")
 
 
 def require_weights(name: str, weights: Sequence[float], count: int) -> None:

@@ -24,7 +24,6 @@ Per trial (cached per env after its first use):
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -32,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.envs.foot_core import FootZuptConfig, FootZuptCore
+from pednav_env.envs.spec import require_nonnegative, require_positive
 from pednav_env.io.load import find_recordings, load_recording
 from pednav_env.io.recording import Recording
 from pednav_env.io.validate import LoadOptions
@@ -86,8 +86,11 @@ class FootReplayConfig:
             )
         if self.setup.gravity != "standard":
             raise ValueError("FootReplayConfig.setup.gravity must be 'standard' (one g per batch)")
-        if not (math.isfinite(self.decision_interval_s) and self.decision_interval_s > 0):
-            raise ValueError(f"decision_interval_s must be > 0, got {self.decision_interval_s!r}")
+        # Not an EnvConfig: the recordings set the rate and there is no scenario;
+        # the settings it shares with the other envs get the same checks.
+        require_positive("decision_interval_s", self.decision_interval_s)
+        require_positive("divergence_error_m", self.divergence_error_m)
+        require_nonnegative("divergence_error_fraction", self.divergence_error_fraction)
         named_setup(self.reference)  # validates the name
 
 

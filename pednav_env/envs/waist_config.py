@@ -15,39 +15,22 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
 
 from pednav_env.constants import STANDARD_GRAVITY
+from pednav_env.envs.spec import (
+    EnvConfig,
+    Knob,
+    ObsFeature,
+    require_choice,
+    require_nonnegative,
+    require_positive,
+    require_probability,
+    require_range,
+    require_weights,
+)
 from pednav_env.gait.waist_walk import PAPER_STEP_PERIOD, PAPER_STEPS
 from pednav_env.nav.step_fusion_kf import StepFusionConfig
 from pednav_env.sensors.waist_grades import WAIST_GRADES
-
-Array = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class Knob:
-    """One action component: ``a`` ∈ [−1, 1] → physical value.
-
-    ``mapping="log"``: ``base · span ** a`` (docs/CONTRACTS.md). ``"linear"``:
-    ``span · a``; ``"linear_positive"``: ``span · max(a, 0)`` (a ≤ 0 keeps the
-    paper's 0, as the foot env's minimum-stance knob). In every case a = 0 gives
-    paper 004's value.
-    """
-
-    name: str
-    mapping: str
-    base: float
-    span: float
-    unit: str
-
-    def value(self, a: Array) -> Array:
-        if self.mapping == "log":
-            return self.base * self.span**a
-        if self.mapping == "linear":
-            return self.base + self.span * a
-        return self.base + self.span * np.maximum(a, 0.0)
-
 
 #: The five knobs, in action order. Paper 004 detects steps at the pure zero
 #: crossing of |a| − g (threshold 0, no hysteresis, no minimum duration) and
@@ -63,39 +46,32 @@ ACTION_KNOBS: tuple[Knob, ...] = (
 )
 ACTION_DIM = len(ACTION_KNOBS)
 
-#: Observation entries: (name, low, high); documented in the env docstring.
-OBS_FEATURES: tuple[tuple[str, float, float], ...] = (
-    ("accel_excess_mean", -20.0, 20.0),
-    ("accel_excess_std", 0.0, 100.0),
-    ("accel_excess_max", -20.0, 500.0),
-    ("accel_excess_min", -20.0, 20.0),
-    ("above_threshold_fraction", 0.0, 1.0),
-    ("steps_detected", 0.0, 50.0),
-    ("step_duration_last", 0.0, 60.0),
-    ("step_duration_avg", 0.0, 60.0),
-    ("time_since_step", 0.0, 600.0),
-    ("log_nis_last", 0.0, 30.0),
-    ("log_nis_interval", 0.0, 30.0),
-    ("innovation_east", -20.0, 20.0),
-    ("innovation_north", -20.0, 20.0),
-    ("sqrt_p_dv_east", 0.0, 50.0),
-    ("sqrt_p_dv_north", 0.0, 50.0),
-    ("log10_sqrt_p_tilt", -12.0, 2.0),
-    ("log10_sqrt_p_drift", -14.0, 0.0),
-    ("bm_velocity_last", -20.0, 50.0),
-    ("ins_speed_last", 0.0, 100.0),
-    ("hip_rise_last", 0.0, 2.0),
+#: Observation entries; documented in the env docstring.
+OBS_FEATURES: tuple[ObsFeature, ...] = (
+    ObsFeature("accel_excess_mean", -20.0, 20.0, "m/s²"),
+    ObsFeature("accel_excess_std", 0.0, 100.0, "m/s²"),
+    ObsFeature("accel_excess_max", -20.0, 500.0, "m/s²"),
+    ObsFeature("accel_excess_min", -20.0, 20.0, "m/s²"),
+    ObsFeature("above_threshold_fraction", 0.0, 1.0, "1"),
+    ObsFeature("steps_detected", 0.0, 50.0, "1"),
+    ObsFeature("step_duration_last", 0.0, 60.0, "s"),
+    ObsFeature("step_duration_avg", 0.0, 60.0, "s"),
+    ObsFeature("time_since_step", 0.0, 600.0, "s"),
+    ObsFeature("log_nis_last", 0.0, 30.0, "1"),
+    ObsFeature("log_nis_interval", 0.0, 30.0, "1"),
+    ObsFeature("innovation_east", -20.0, 20.0, "m/s"),
+    ObsFeature("innovation_north", -20.0, 20.0, "m/s"),
+    ObsFeature("sqrt_p_dv_east", 0.0, 50.0, "m/s"),
+    ObsFeature("sqrt_p_dv_north", 0.0, 50.0, "m/s"),
+    ObsFeature("log10_sqrt_p_tilt", -12.0, 2.0, "log rad"),
+    ObsFeature("log10_sqrt_p_drift", -14.0, 0.0, "log rad/s"),
+    ObsFeature("bm_velocity_last", -20.0, 50.0, "m/s"),
+    ObsFeature("ins_speed_last", 0.0, 100.0, "m/s"),
+    ObsFeature("hip_rise_last", 0.0, 2.0, "m"),
 )
 
 
 # --------------------------------------------------------------------------- configuration
-def _check_range(name: str, r: tuple[float, float], lo: float, hi: float = math.inf) -> None:
-    if len(r) != 2 or not all(isinstance(x, int | float) and math.isfinite(x) for x in r):
-        raise ValueError(f"{name} must be a (low, high) pair of finite numbers, got {r!r}")
-    if not (lo <= r[0] <= r[1] <= hi):
-        raise ValueError(f"{name} must satisfy {lo} ≤ low ≤ high ≤ {hi}, got {r!r}")
-
-
 @dataclass(frozen=True)
 class WaistRandomization:
     """Ranges of the random scenario (uniform unless said; our choices, SI units).
@@ -134,42 +110,47 @@ class WaistRandomization:
     grade_scale: tuple[float, float] = (0.5, 2.0)
 
     def __post_init__(self) -> None:
-        _check_range("duration_s", self.duration_s, 1.0)
-        _check_range("leg_length_m", self.leg_length_m, 0.2, 2.0)
-        _check_range("initial_stand_s", self.initial_stand_s, 0.0)
-        _check_range("stop_duration_s", self.stop_duration_s, 0.0)
-        _check_range("slope_deg", self.slope_deg, 0.0, 30.0)
-        _check_range("turn_deg", self.turn_deg, 0.0, 180.0)
-        _check_range("vibration_amplitude", self.vibration_amplitude, 0.0)
-        _check_range("vibration_frequency_hz", self.vibration_frequency_hz, 0.0)
-        _check_range("vibration_decay_s", self.vibration_decay_s, 1e-4)
-        _check_range("grade_scale", self.grade_scale, 1e-3)
+        inf = math.inf
+        for name, within in (
+            ("duration_s", (1.0, inf)),
+            ("leg_length_m", (0.2, 2.0)),
+            ("initial_stand_s", (0.0, inf)),
+            ("stop_duration_s", (0.0, inf)),
+            ("slope_deg", (0.0, 30.0)),
+            ("turn_deg", (0.0, 180.0)),
+            ("vibration_amplitude", (0.0, inf)),
+            ("vibration_frequency_hz", (0.0, inf)),
+            ("vibration_decay_s", (1e-4, inf)),
+            ("grade_scale", (1e-3, inf)),
+        ):
+            require_range(name, getattr(self, name), within=within)
         if self.vibration_amplitude[0] <= 0 and self.vibration_amplitude[1] > 0:
             raise ValueError("vibration_amplitude: log-uniform needs low > 0 (or (0, 0))")
         if len(self.gait_step_period_s) != 3 or len(self.gait_step_ratio) != 3:
             raise ValueError("gait_step_period_s and gait_step_ratio need 3 ranges each")
         for r in self.gait_step_period_s:
-            _check_range("gait_step_period_s", r, 0.1, 3.0)
+            require_range("gait_step_period_s", r, within=(0.1, 3.0))
         for r in self.gait_step_ratio:
             # L = 2 l cos φ_min < 2 l; keep φ_min > slope (pendulum validity)
-            _check_range("gait_step_ratio", r, 0.05, 1.6)
-        w = np.asarray(self.gait_weights, dtype=float)
-        if w.shape != (3,) or np.any(w < 0) or w.sum() <= 0:
-            raise ValueError(f"gait_weights invalid: {self.gait_weights!r}")
+            require_range("gait_step_ratio", r, within=(0.05, 1.6))
+        require_weights("gait_weights", self.gait_weights, 3)
         if not (1 <= self.bout_steps[0] <= self.bout_steps[1]):
             raise ValueError(f"bout_steps must satisfy 1 ≤ low ≤ high, got {self.bout_steps!r}")
         for name in ("stop_probability", "slope_probability", "turn_probability"):
-            p = getattr(self, name)
-            if not (0.0 <= p <= 1.0):
-                raise ValueError(f"{name} must lie in [0, 1], got {p!r}")
-        for name in ("leg_length_error", "step_jitter", "heading_wander_deg"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and 0.0 <= v <= 0.2 * (180.0 if "deg" in name else 1.0)):
-                raise ValueError(f"{name} must be a small number ≥ 0, got {v!r}")
+            require_probability(name, getattr(self, name))
+        for name, most in (
+            ("leg_length_error", 0.2),
+            ("step_jitter", 0.2),
+            ("heading_wander_deg", 36.0),
+        ):
+            value = getattr(self, name)
+            require_nonnegative(name, value)
+            if value > most:
+                raise ValueError(f"{name} must be a small number <= {most}, got {value!r}")
 
 
 @dataclass(frozen=True)
-class WaistStepConfig:
+class WaistStepConfig(EnvConfig):
     """Settings of the waist environment (all lanes share them).
 
     ``scenario``: ``"random"`` (domain randomisation, :class:`WaistRandomization`)
@@ -195,39 +176,17 @@ class WaistStepConfig:
     divergence_error_fraction: float = 0.25
 
     def __post_init__(self) -> None:
-        if self.scenario not in ("random", "paper"):
-            raise ValueError(f"scenario must be 'random' or 'paper', got {self.scenario!r}")
-        if not (isinstance(self.rate_hz, int | float) and math.isfinite(self.rate_hz)):
-            raise ValueError(f"rate_hz must be a finite number > 0, got {self.rate_hz!r}")
-        if self.rate_hz <= 0:
-            raise ValueError(f"rate_hz must be > 0, got {self.rate_hz!r}")
-        dis = self.decision_interval_s
-        if not (isinstance(dis, int | float) and math.isfinite(dis) and dis > 0):
-            raise ValueError(f"decision_interval_s must be > 0, got {dis!r}")
-        if round(dis * self.rate_hz) < 1:
-            raise ValueError(f"decision_interval_s={dis!r} is shorter than one sample")
+        self.check_env_settings()
         if not isinstance(self.randomization, WaistRandomization):
             raise ValueError("randomization must be a WaistRandomization")
         if not isinstance(self.filter, StepFusionConfig):
             raise ValueError("filter must be a StepFusionConfig")
-        for g in self.sensor_grades:
-            if g not in WAIST_GRADES:
-                raise ValueError(
-                    f"sensor_grades: unknown grade {g!r}; known: {sorted(WAIST_GRADES)}"
-                )
-        w = np.asarray(self.sensor_grade_weights, dtype=float)
-        if w.shape != (len(self.sensor_grades),) or np.any(w < 0) or w.sum() <= 0:
-            raise ValueError(f"sensor_grade_weights invalid: {self.sensor_grade_weights!r}")
+        for grade in self.sensor_grades:
+            require_choice("sensor_grades", grade, tuple(sorted(WAIST_GRADES)))
+        require_weights("sensor_grade_weights", self.sensor_grade_weights, len(self.sensor_grades))
         if not (isinstance(self.paper_steps, int | np.integer) and self.paper_steps >= 1):
             raise ValueError(f"paper_steps must be an integer ≥ 1, got {self.paper_steps!r}")
-        if not (math.isfinite(self.g) and self.g > 0):
-            raise ValueError(f"g must be > 0, got {self.g!r}")
-        if not (self.divergence_error_m > 0 and self.divergence_error_fraction >= 0):
-            raise ValueError("divergence_error_m must be > 0 and divergence_error_fraction ≥ 0")
-
-    @property
-    def interval_samples(self) -> int:
-        return int(round(self.decision_interval_s * self.rate_hz))
+        require_positive("g", self.g)
 
     @property
     def action_dim(self) -> int:

@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from pednav_env.envs.spec import obs_bounds, validate_action
 from pednav_env.envs.waist_config import ACTION_DIM, ACTION_KNOBS, OBS_FEATURES, WaistStepConfig
 from pednav_env.envs.waist_episode import generate_episode
 from pednav_env.nav.step_fusion_kf import StepFusionKF
@@ -110,12 +111,7 @@ class WaistStepCore:
         self.lanes = np.arange(n)
         self.ar_k = np.arange(self.k)
         self.obs = np.zeros((n, len(OBS_FEATURES) + ACTION_DIM), dtype=np.float32)
-        self.obs_low = np.array(
-            [lo for _, lo, _ in OBS_FEATURES] + [-1.0] * ACTION_DIM, dtype=np.float32
-        )
-        self.obs_high = np.array(
-            [hi for _, _, hi in OBS_FEATURES] + [1.0] * ACTION_DIM, dtype=np.float32
-        )
+        self.obs_low, self.obs_high = obs_bounds(OBS_FEATURES, ACTION_DIM)
 
     # ------------------------------------------------------------------ reset
     def reset_lanes(self, lanes: NDArray[np.integer], rngs: list[np.random.Generator]) -> None:
@@ -181,17 +177,8 @@ class WaistStepCore:
 
     # ------------------------------------------------------------------ action
     def validate_action(self, action: Any) -> Array:
-        """Shape ``(N, 5)`` and finiteness check; returns float64."""
-        try:
-            a = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(f"{self.env_name}: action is not numeric: {action!r}") from None
-        want = (self.n, ACTION_DIM)
-        if a.shape != want:
-            raise ValueError(f"{self.env_name}: actions must have shape {want}, got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"{self.env_name}: action contains NaN or inf: {a.tolist()}")
-        return a
+        """Shape ``(N, 5)``, numeric and finite (:func:`spec.validate_action`); float64."""
+        return validate_action(action, (self.n, ACTION_DIM), self.env_name)
 
     def _apply_action(self, lanes: NDArray[np.integer]) -> None:
         a = self.action[lanes]

@@ -4,7 +4,7 @@
   |ω'| ≤ ω_max and |f'_x3 − g| ≤ Δf_max, f'_x3 the vertical specific force in
   the navigation frame. It needs the filter's attitude, so it is evaluated
   inside the filter loop, by the compiled ZUPT kernel
-  (:func:`pednav_env.nav.zupt_kernel.eq5_condition`), with optional causal
+  (:func:`pednav_env.nav.detector_kernel.eq5_condition`), with optional causal
   moving averages over ``window_s`` (0 = sample by sample, as printed).
 - :class:`ShoeDetectorConfig` — the SHOE / GLRT statistic of Skog, Händel,
   Nilsson, Rantakokko (2010), "Zero-velocity detection — an algorithm

@@ -37,7 +37,7 @@ def test_adaptive_rules_of_the_other_envs_follow_the_nis(env_id, feature, knob):
     from pednav_env.envs import marker_core, waist_config
 
     core = waist_config if "Waist" in env_id else marker_core
-    names = [f.name if hasattr(f, "name") else f[0] for f in core.OBS_FEATURES]
+    names = [f.name for f in core.OBS_FEATURES]
     space = gym.make(env_id).action_space
     obs = np.zeros((3, len(names) + space.shape[0]), np.float32)
     obs[:, names.index(feature)] = np.log1p([40.0, 0.04, 0.0])  # NIS ≫ m, ≪ m, none

@@ -105,6 +105,8 @@ def test_train_your_own_script_runs(tmp_path, monkeypatch, capsys):
     assert re.search(r"PPO: mean time-averaged error \d+\.\d{3} m over 3 episodes", out)
 
 
-@pytest.mark.parametrize("page", ["CONTRACTS.md", "CONVENTIONS.md", "TRAIN_YOUR_OWN.md"])
+@pytest.mark.parametrize(
+    "page", ["ARCHITECTURE.md", "CONTRACTS.md", "CONVENTIONS.md", "TRAIN_YOUR_OWN.md"]
+)
 def test_new_pages_are_listed_in_the_readme(page):
     assert f"docs/{page}" in (ROOT / "README.md").read_text()

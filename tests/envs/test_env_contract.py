@@ -22,40 +22,15 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
-from env_rollout import rollout
+from env_rollout import ENV_IDS, FAST_KWARGS, rollout
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from gymnasium.utils.env_checker import data_equivalence
 from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
-from testdata import REPLAY_DATA
 
 import pednav_env  # noqa: F401  (registers the environments)
-from pednav_env.envs.foot_core import FootZuptConfig
-from pednav_env.envs.marker_config import MarkerTrackConfig
-from pednav_env.envs.waist_config import WaistRandomization, WaistStepConfig
-from pednav_env.gait.foot_route import RouteRandomization
 
-ENV_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("pednav/"))
-#: Constructor arguments that keep the episodes short (the defaults walk for
-#: minutes); an env not listed here is checked with its defaults.
-FAST_KWARGS = {
-    "pednav/FootZupt-v0": {
-        "config": FootZuptConfig(route=RouteRandomization(duration_s=(12.0, 20.0)))
-    },
-    "pednav/FootZuptReplay-v0": {"data_dir": str(REPLAY_DATA)},
-    "pednav/MarkerTrack-v0": {
-        "config": MarkerTrackConfig(
-            duration_s=(4.0, 8.0),
-            gait_change_rate_hz=0.5,
-            reanchor_after_s=2.0,
-            reanchor_keep_s=1.0,
-        )
-    },
-    "pednav/WaistStep-v0": {
-        "config": WaistStepConfig(randomization=WaistRandomization(duration_s=(12.0, 20.0)))
-    },
-}
 #: Envs whose test data hold a single episode (the replay env's one shipped trial),
 #: so that another seed cannot give another episode.
 SINGLE_EPISODE = {"pednav/FootZuptReplay-v0"}
@@ -212,6 +187,27 @@ def test_bad_actions_raise_with_the_env_name(env_id, bad):
     with pytest.raises(ValueError, match=env_id):
         venv.step(np.stack([action, np.zeros(k)]) if batch is None else batch)
     venv.close()
+
+
+def test_bad_common_settings_are_refused_naming_them(env_id):
+    """The settings every env shares (scenario, decision interval and rate, checked by
+    envs.spec.EnvConfig; the replay env takes its rate from the recordings and has no
+    scenario), a render mode and the lane count: a bad value given to the constructor
+    is a ValueError naming it."""
+    bad = {"scenario": "moon", "decision_interval_s": 0.0, "rate_hz": -10.0}
+    takes = set(bad) & set(make(env_id).unwrapped.arguments)
+    assert takes == ({"decision_interval_s"} if env_id == "pednav/FootZuptReplay-v0" else set(bad))
+    for name in sorted(takes):
+        with pytest.raises(ValueError, match=name):
+            make(env_id, **{name: bad[name]})
+    # gymnasium's make warns first; the env then refuses with a ValueError
+    with (
+        pytest.warns(UserWarning, match="render_mode"),
+        pytest.raises(ValueError, match="render_mode"),
+    ):
+        make(env_id, render_mode="ascii")
+    with pytest.raises(ValueError, match="num_envs"):
+        make_vec(env_id, 0)
 
 
 def test_random_and_extreme_actions_over_whole_episodes(env_id):

@@ -18,34 +18,11 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import pytest
-from testdata import REPLAY_DATA
+from env_rollout import ENV_IDS, FAST_KWARGS
 
 import pednav_env  # noqa: F401  (registers the environments)
 from baselines import InnovationAdaptivePolicy
-from pednav_env.envs.foot_core import FootZuptConfig
-from pednav_env.envs.marker_config import MarkerTrackConfig
-from pednav_env.envs.waist_config import WaistRandomization, WaistStepConfig
-from pednav_env.gait.foot_route import RouteRandomization
 
-ENV_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("pednav/"))
-#: Short episodes (the defaults walk for minutes).
-FAST_KWARGS: dict[str, dict[str, Any]] = {
-    "pednav/FootZupt-v0": {
-        "config": FootZuptConfig(route=RouteRandomization(duration_s=(12.0, 16.0)))
-    },
-    "pednav/FootZuptReplay-v0": {"data_dir": str(REPLAY_DATA)},
-    "pednav/MarkerTrack-v0": {
-        "config": MarkerTrackConfig(
-            duration_s=(6.0, 8.0),
-            gait_change_rate_hz=0.5,
-            reanchor_after_s=2.0,
-            reanchor_keep_s=1.0,
-        )
-    },
-    "pednav/WaistStep-v0": {
-        "config": WaistStepConfig(randomization=WaistRandomization(duration_s=(12.0, 16.0)))
-    },
-}
 #: The rule that drives each env (the replay env shares FootZupt's spaces and rule).
 RULE = {"pednav/FootZuptReplay-v0": "pednav/FootZupt-v0"}
 

@@ -7,7 +7,15 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from pednav_env.envs.spec import EnvConfig, Knob, ObsFeature, obs_bounds, validate_action
+from pednav_env.envs import foot_core, marker_config, marker_core, waist_config
+from pednav_env.envs.spec import (
+    EnvConfig,
+    Knob,
+    ObsFeature,
+    obs_bounds,
+    require_range,
+    validate_action,
+)
 
 
 def test_knob_mappings_give_the_paper_value_at_zero_and_their_range_at_the_ends():
@@ -92,3 +100,23 @@ def test_knob_action_inverts_a_log_knob_and_is_refused_for_linear_ones():
     np.testing.assert_allclose(omega.action(np.array([0.022, 0.22, 2.2])), [-1.0, 0.0, 1.0])
     with pytest.raises(ValueError, match="log knobs only"):
         Knob("step_threshold", "linear", 0.0, 3.0, "m/s²").action(1.0)
+
+
+@pytest.mark.parametrize(
+    "knobs, features",
+    [
+        (foot_core.ACTION_KNOBS, foot_core.OBS_FEATURES),
+        (marker_config.ACTION_KNOBS, marker_core.OBS_FEATURES),
+        (waist_config.ACTION_KNOBS, waist_config.OBS_FEATURES),
+    ],
+)
+def test_every_env_declares_its_knobs_and_features_with_the_shared_specs(knobs, features):
+    assert all(type(k) is Knob for k in knobs) and all(type(f) is ObsFeature for f in features)
+    assert len({f.name for f in features}) == len(features)  # names index the observation
+
+
+def test_require_range_within_bounds_names_the_setting():
+    require_range("slope_deg", (0.0, 30.0), within=(0.0, 30.0))  # the bounds are allowed
+    for bad in ((2.0, 31.0), (-1.0, 8.0)):
+        with pytest.raises(ValueError, match=r"slope_deg must lie within \(0.0, 30.0\)"):
+            require_range("slope_deg", bad, within=(0.0, 30.0))
