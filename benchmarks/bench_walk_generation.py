@@ -4,7 +4,7 @@ Three generators, each on the same 64 routes per speed band (100 Hz, as the
 FootZupt env; route drawing, the walk kernel and the IMU errors timed
 together, one walk per call as an env reset does):
 
-- ``today``: :func:`pednav_env.gait.foot_route.speed_route` with the realistic
+- ``today``: :func:`pednav_env.gait.speed_route.speed_route` with the realistic
   stance terms, ADIS16470 grade;
 - ``calibrated``: the same routes with the calibrated stance dynamics
   (:meth:`StanceRandomization.calibrated`), MicroStrain 3DM-GX5-25 grade;
@@ -22,7 +22,8 @@ import time
 import numpy as np
 
 from pednav_env.gait.foot import FootSimConfig, simulate_foot
-from pednav_env.gait.foot_route import SpeedRouteConfig, random_route, speed_route
+from pednav_env.gait.foot_route import random_route
+from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.sensors.imu import ImuSpec, simulate_imu
 

@@ -2,7 +2,7 @@
 
 For each speed band (:data:`SPEED_BANDS`): the recordings whose walking speed
 falls in it (:mod:`pednav_env.calibration.stats`), ``walks_per_band``
-simulated walks of that band's speeds (:func:`pednav_env.gait.foot_route.speed_route`,
+simulated walks of that band's speeds (:func:`pednav_env.gait.speed_route.speed_route`,
 one walker's stance dynamics and IMU errors per walk: domain
 randomisation), and
 
@@ -29,7 +29,7 @@ from scipy.stats import wasserstein_distance
 from pednav_env.calibration.sources import samples_from_simulation
 from pednav_env.calibration.stats import WalkStats, walk_stats
 from pednav_env.gait.foot import FootSimConfig, FootTrajectory, simulate_foot
-from pednav_env.gait.foot_route import SpeedRouteConfig, speed_route
+from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.sensors.imu import IMU_GRADES, ImuMeasurements, simulate_imu
 

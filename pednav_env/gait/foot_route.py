@@ -9,6 +9,8 @@ A route is a sequence of :class:`Stride` records; the simulator
 - :func:`random_route` — domain randomisation for the environments: legs of
   random length, turns (heading changes spread over strides), stops
   (standing still for seconds) and gait changes from slow walking to running.
+
+Routes whose strides keep to a speed band are in :mod:`pednav_env.gait.speed_route`.
 """
 
 from __future__ import annotations
@@ -97,10 +99,10 @@ class StrideShape:
             raise ValueError("StrideShape.toe_off_pitch and heel_strike_pitch are set together")
 
     @classmethod
-    def _drawn(cls, **values: float | Gait) -> StrideShape:
+    def unchecked(cls, **values: float | Gait) -> StrideShape:
         """A shape from values inside the validated ranges by construction (the
-        draws of :func:`random_route`), without ``__post_init__``'s checks: they
-        were most of the time of drawing a route."""
+        draws of :func:`random_route` and :func:`pednav_env.gait.speed_route.speed_route`),
+        without ``__post_init__``'s checks: they were most of the time of drawing a route."""
         shape = object.__new__(cls)
         shape.__dict__.update(_SHAPE_DEFAULTS, **values)
         return shape
@@ -247,7 +249,7 @@ class RouteRandomization:
 #: Walking gaits draw the (length, cycle) ranges of all three walking classes
 #: and keep their own pair, then the stance fraction a and the noise of the
 #: swing height, toe-off pitch, mid-swing pitch and roll.
-_WALK_DRAWS = (
+WALK_DRAWS = (
     (0.4, 0.8),
     (1.2, 1.5),
     (0.8, 1.2),
@@ -263,7 +265,7 @@ _WALK_DRAWS = (
 _WALK_COLUMNS = {Gait.SLOW_WALK: 0, Gait.WALK: 2, Gait.FAST_WALK: 4}
 #: Running: length, cycle, stance fraction, swing height, toe-off and
 #: heel-strike pitch, mid-swing pitch and roll.
-_RUN_DRAWS = (
+RUN_DRAWS = (
     (1.6, 2.4),
     (0.65, 0.8),
     (0.08, 0.12),
@@ -281,7 +283,7 @@ def _random_stride_shapes(rng: np.random.Generator, gait: Gait, n: int) -> list[
     The same draws, in the same order, as ``n`` calls of
     :func:`random_stride_shape`, made in one ``rng.uniform`` call.
     """
-    ranges = np.array(_RUN_DRAWS if gait is Gait.RUN else _WALK_DRAWS)
+    ranges = np.array(RUN_DRAWS if gait is Gait.RUN else WALK_DRAWS)
     u = rng.uniform(ranges[:, 0], ranges[:, 1], size=(n, len(ranges))).tolist()
     shapes = []
     for row in u:
@@ -301,7 +303,7 @@ def _random_stride_shapes(rng: np.random.Generator, gait: Gait, n: int) -> list[
             height = 0.06 + 0.04 * speed + d_height
             toe_off, heel_strike = 0.4 + 0.3 * speed + d_toe_off, -(0.2 + 0.1 * speed)
         shapes.append(
-            StrideShape._drawn(
+            StrideShape.unchecked(
                 stride_length_m=length,
                 stance_s=t0,
                 heel_off_s=t1,
@@ -357,158 +359,3 @@ def random_route(rng: np.random.Generator, config: RouteRandomization | None = N
 def paper_stride_shape(stride_length_m: float) -> StrideShape:
     """Paper 003 scenario stride: the paper's knots only (stance and mid-swing)."""
     return replace(StrideShape(), stride_length_m=stride_length_m)
-
-
-@dataclass(frozen=True)
-class SpeedRouteConfig:
-    """Ranges for :func:`speed_route`: walks whose every stride's speed lies in
-    ``speed_mps`` (m/s), the gait following from the speed.
-
-    Gait by speed: slow walk below 0.75 m/s, walk below 1.25, fast walk below
-    ``run_from_mps``, run from there. Walking cycle T = 1 / (0.55 + 0.3 v) s
-    (±7 %), i.e. 1.43 s at 0.5 m/s, 1.18 s at 1 m/s and 0.87 s at 2 m/s;
-    running cycles 0.65–0.8 s as in :class:`RouteRandomization`. Each leg draws
-    one speed and each stride varies it by ±``speed_jitter`` (relative).
-    """
-
-    speed_mps: tuple[float, float] = (0.8, 1.3)
-    duration_s: tuple[float, float] = (30.0, 60.0)
-    leg_strides: tuple[int, int] = (4, 16)
-    max_turn_per_stride: float = math.radians(60.0)
-    stop_probability: float = 0.15
-    stop_s: tuple[float, float] = (1.0, 5.0)
-    speed_jitter: float = 0.05
-    run_from_mps: float = 2.0
-    stance_motion: StanceMotion | None = None
-
-    def __post_init__(self) -> None:
-        lo, hi = self.speed_mps
-        if not (0.1 <= lo <= hi <= 4.0):
-            raise ValueError(
-                "SpeedRouteConfig.speed_mps must satisfy 0.1 ≤ lo ≤ hi ≤ 4 m/s, "
-                f"got {self.speed_mps}"
-            )
-        if not (0 < self.duration_s[0] <= self.duration_s[1] and math.isfinite(self.duration_s[1])):
-            raise ValueError(f"SpeedRouteConfig.duration_s invalid: {self.duration_s}")
-        if not (1 <= self.leg_strides[0] <= self.leg_strides[1]):
-            raise ValueError(f"SpeedRouteConfig.leg_strides invalid: {self.leg_strides}")
-        if not (0 <= self.stop_probability <= 1):
-            raise ValueError(
-                f"SpeedRouteConfig.stop_probability must be in [0, 1], got {self.stop_probability}"
-            )
-        if not (0 <= self.stop_s[0] <= self.stop_s[1]):
-            raise ValueError(f"SpeedRouteConfig.stop_s invalid: {self.stop_s}")
-        if not (0 <= self.speed_jitter < 0.5):
-            raise ValueError(
-                f"SpeedRouteConfig.speed_jitter must be in [0, 0.5), got {self.speed_jitter}"
-            )
-
-
-def gait_for_speed(speed_mps: float, run_from_mps: float = 2.0) -> Gait:
-    """The gait class of a stride at ``speed_mps`` (:class:`SpeedRouteConfig`)."""
-    if speed_mps < 0.75:
-        return Gait.SLOW_WALK
-    if speed_mps < 1.25:
-        return Gait.WALK
-    return Gait.FAST_WALK if speed_mps < run_from_mps else Gait.RUN
-
-
-#: Bounds of the draws of :func:`_speed_stride_shape`: running without the length
-#: (the speed gives it), walking a cycle jitter then the shape noise.
-_RUN_BOUNDS = (np.array(_RUN_DRAWS)[1:, 0], np.array(_RUN_DRAWS)[1:, 1])
-_WALK_BOUNDS = (
-    np.array((0.93, *np.array(_WALK_DRAWS)[6:, 0])),
-    np.array((1.07, *np.array(_WALK_DRAWS)[6:, 1])),
-)
-#: Middle of the walking stance share's range (0.30–0.38).
-_MID_STANCE_SHARE = 0.34
-#: Largest swing pitch knot (rad) a walker's ``swing_pitch_scale`` reaches
-#: (StrideShape accepts angles below 1.4 rad).
-MAX_SWING_PITCH_RAD = 1.35
-
-
-def _speed_stride_shape(
-    rng: np.random.Generator, speed: float, gait: Gait, walker: StanceMotion | None = None
-) -> StrideShape:
-    """A realistic stride at ``speed`` m/s: cycle from the speed (SpeedRouteConfig),
-    the other shape values drawn as in :func:`random_stride_shape`.
-
-    A ``walker`` with a ``flat_fraction`` sets the shares of a walking cycle
-    (:meth:`StanceMotion.cycle_fractions`; the drawn stance share less its mid-range
-    0.34 is the stride's jitter) and scales the swing's pitch knots by its
-    ``swing_pitch_scale`` (at most :data:`MAX_SWING_PITCH_RAD`). The draws from
-    ``rng`` are the same with or without a walker."""
-    if gait is Gait.RUN:
-        cycle, stance_frac, height, toe_off, heel_strike, pitch, roll = rng.uniform(
-            *_RUN_BOUNDS
-        ).tolist()
-        t0, t1 = stance_frac * cycle, 0.10 * cycle
-        t2, t3 = cycle - t0 - 2 * t1, t1
-        heel_strike = -heel_strike
-    else:
-        jitter, a, d_height, d_toe_off, pitch, roll = rng.uniform(*_WALK_BOUNDS).tolist()
-        cycle = jitter / (0.55 + 0.3 * speed)
-        if walker is None or walker.flat_fraction is None:
-            t0, t1, t2, t3 = a * cycle, (0.5 - a) * cycle, a * cycle, (0.5 - a) * cycle
-        else:
-            flat, heel, swing = walker.cycle_fractions(speed, a - _MID_STANCE_SHARE)
-            t0, t1, t2, t3 = flat * cycle, heel * cycle, swing * cycle, heel * cycle
-        height = 0.06 + 0.04 * speed + d_height
-        toe_off, heel_strike = 0.4 + 0.3 * speed + d_toe_off, -(0.2 + 0.1 * speed)
-    if walker is not None and walker.swing_pitch_scale != 1.0:
-        k, top = walker.swing_pitch_scale, MAX_SWING_PITCH_RAD
-        toe_off, heel_strike = min(k * toe_off, top), max(k * heel_strike, -top)
-        pitch = min(max(k * pitch, -top), top)
-    return StrideShape._drawn(
-        stride_length_m=speed * cycle,
-        stance_s=t0,
-        heel_off_s=t1,
-        swing_s=t2,
-        heel_strike_s=t3,
-        swing_height_m=height,
-        mid_swing_pitch=pitch,
-        mid_swing_roll=roll,
-        toe_off_pitch=toe_off,
-        heel_strike_pitch=heel_strike,
-        gait=gait,
-    )
-
-
-def speed_route(rng: np.random.Generator, config: SpeedRouteConfig | None = None) -> Route:
-    """A random walk whose strides' speeds lie in ``config.speed_mps``: legs
-    separated by turns and stops (:class:`SpeedRouteConfig`).
-
-    Draws only from ``rng``; the route starts at the origin heading east, with
-    a 2 s stand (the alignment window) and a 1 s stand at the end.
-    """
-    cfg = config or SpeedRouteConfig()
-    lo, hi = cfg.speed_mps
-    target = rng.uniform(*cfg.duration_s)
-    initial, final = 2.0, 1.0
-    strides: list[Stride] = []
-    elapsed = initial + final
-    while True:
-        leg_speed = rng.uniform(lo, hi)
-        n_leg = int(rng.integers(cfg.leg_strides[0], cfg.leg_strides[1] + 1))
-        turn_total = rng.uniform(-math.pi, math.pi)
-        n_turn = max(1, math.ceil(abs(turn_total) / cfg.max_turn_per_stride))
-        stop = rng.uniform(*cfg.stop_s) if rng.uniform() < cfg.stop_probability else 0.0
-        for i in range(n_leg):
-            v = leg_speed * (1.0 + cfg.speed_jitter * rng.uniform(-1.0, 1.0))
-            v = min(max(v, lo), hi)
-            gait = gait_for_speed(v, cfg.run_from_mps)
-            shape = _speed_stride_shape(rng, v, gait, cfg.stance_motion)
-            turn = turn_total / n_turn if i < n_turn else 0.0
-            s = Stride(shape, heading_change=turn, stop_s=stop if i == 0 else 0.0)
-            if elapsed + shape.cycle_s + s.stop_s > target and strides:
-                phases = tuple(rng.uniform(0, 2 * math.pi, 3))
-                return Route(
-                    tuple(strides),
-                    initial,
-                    final,
-                    realistic=True,
-                    seed_phases=phases,
-                    stance_motion=cfg.stance_motion,
-                )
-            strides.append(s)
-            elapsed += shape.cycle_s + s.stop_s

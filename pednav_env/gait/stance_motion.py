@@ -24,7 +24,7 @@ multiplies Q and E by 10^(σ_s ξ), ξ standard normal drawn from ``seed``
 (stance-to-stance variation).
 
 A walker also has a gait timing and a swing vigour, used by
-:func:`pednav_env.gait.foot_route.speed_route` when ``flat_fraction`` is set
+:func:`pednav_env.gait.speed_route.speed_route` when ``flat_fraction`` is set
 (:meth:`StanceMotion.cycle_fractions`): the walking cycle is split into foot
 flat f = f₁ + β ln v (plus the stride's jitter), heel-off and heel strike h
 each, and swing 1 − f − 2h; the swing's pitch knots are scaled by

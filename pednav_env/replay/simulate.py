@@ -16,7 +16,7 @@ a recording. Columns, one line per IMU sample:
 
 ¹ x forward, y left, z up: a level IMU reads +g on z at rest.
 
-The route: with a speed range, :func:`pednav_env.gait.foot_route.speed_route`
+The route: with a speed range, :func:`pednav_env.gait.speed_route.speed_route`
 (each stride's speed drawn in the range, the gait following from the speed);
 with a gait class instead, :func:`pednav_env.gait.foot_route.random_route`
 with only that class (its own speed ranges). Both start with a 2 s stand (the
@@ -38,13 +38,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.gait.foot import FootSimConfig, simulate_foot
-from pednav_env.gait.foot_route import (
-    Gait,
-    RouteRandomization,
-    SpeedRouteConfig,
-    random_route,
-    speed_route,
-)
+from pednav_env.gait.foot_route import Gait, RouteRandomization, random_route
+from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
 

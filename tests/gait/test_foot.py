@@ -10,12 +10,10 @@ from pednav_env.gait.foot import FootSimConfig, _build_schedule, simulate_foot
 from pednav_env.gait.foot_route import (
     Gait,
     RouteRandomization,
-    SpeedRouteConfig,
     Stride,
     StrideShape,
     paper_stride_shape,
     random_route,
-    speed_route,
     square_route,
 )
 
@@ -134,18 +132,6 @@ def test_random_routes_are_seeded_and_varied():
         s.shape.stride_length_m for r in routes for s in r.strides if s.shape.gait != Gait.RUN
     ]
     assert 0.4 <= min(lengths) and max(lengths) <= 1.4
-
-
-def test_speed_route_strides_stay_in_the_band_and_gait_follows_speed() -> None:
-    for band in ((0.3, 0.8), (1.3, 1.8), (2.6, 3.8)):
-        route = speed_route(np.random.default_rng(3), SpeedRouteConfig(speed_mps=band))
-        speeds = np.array([s.shape.speed for s in route.strides])
-        assert speeds.min() >= band[0] - 1e-12 and speeds.max() <= band[1] + 1e-12
-        gaits = {s.shape.gait for s in route.strides}
-        if band[0] >= 2.0:
-            assert gaits == {Gait.RUN}
-        if band[1] <= 0.8:
-            assert Gait.RUN not in gaits and Gait.FAST_WALK not in gaits
 
 
 def test_batch_equals_single_walks():

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from pednav_env.gait.foot import FootSimConfig, simulate_foot
-from pednav_env.gait.foot_route import SpeedRouteConfig, speed_route
+from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import (
     MIN_FLAT,
     MIN_SWING,
