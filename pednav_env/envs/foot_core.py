@@ -22,6 +22,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from pednav_env.envs.foot_filters import (
+    MIN_STANCE_MAX_S,
+    PAPER_KNOBS,
+    ShoeStatistic,
+    family_filter,
+    family_knobs,
+    require_family,
+)
 from pednav_env.envs.spec import (
     EnvConfig,
     Knob,
@@ -44,18 +52,8 @@ from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
 
 Array = NDArray[np.float64]
 
-#: Knobs set by the action (log mapping, base · span ** a).
-#: ω_max and Δf_max bases are paper 003's simulation thresholds (see
-#: ThresholdDetectorConfig); the noise scales multiply the paper's Q and R.
-ACTION_KNOBS: tuple[Knob, ...] = (
-    Knob("omega_max", "log", 0.22, 10.0, "rad/s"),
-    Knob("delta_f_max", "log", 0.33, 10.0, "m/s²"),
-    Knob("process_noise_scale", "log", 1.0, 100.0, "1"),
-    Knob("zupt_noise_scale", "log", 1.0, 100.0, "1"),
-)
-#: Optional fifth knob: minimum stance duration = MIN_STANCE_MAX_S · max(a, 0)
-#: (linear, so that a = 0 keeps the paper's "no minimum").
-MIN_STANCE_MAX_S = 0.15
+#: Knobs of the paper family (re-exported; the families: :mod:`pednav_env.envs.foot_filters`).
+ACTION_KNOBS = PAPER_KNOBS
 
 #: Observation entries; documented in the env docstring.
 OBS_FEATURES: tuple[ObsFeature, ...] = (
@@ -83,7 +81,9 @@ class FootZuptConfig(EnvConfig):
     """Settings of the foot environment (all lanes share them).
 
     ``scenario``: ``"random"`` (domain randomisation) or ``"paper"`` (paper
-    003's square walk, 1 m strides, its IMU).
+    003's square walk, 1 m strides, its IMU). ``filter_family`` (``gym.make``
+    argument ``filter``): ``"paper"`` or ``"shoe"``
+    (:mod:`pednav_env.envs.foot_filters`).
     """
 
     scenario: str = "random"
@@ -93,9 +93,13 @@ class FootZuptConfig(EnvConfig):
     #: IMU grades drawn per episode and their weights (random scenario).
     imu_grades: tuple[str, ...] = ("paper003", "adis16470", "consumer")
     imu_grade_weights: tuple[float, ...] = (0.4, 0.3, 0.3)
-    #: The paper filter (the policy at action 0): paper 003's IMU model and
-    #: thresholds; in the random scenario also its real-data gyro-bias
-    #: calibration at rest (the paper's simulation has none). None = that default.
+    #: The filter family: "paper" (eq 5, ZUPTs at stance boundaries) or "shoe"
+    #: (SHOE detector, a ZUPT at every stance sample).
+    filter_family: str = "paper"
+    #: The filter at action 0; None = the family's (foot_filters.family_filter):
+    #: paper 003's IMU model and thresholds, in the random scenario with its
+    #: real-data gyro-bias calibration at rest (the paper's simulation has none),
+    #: or real-fixed's configuration.
     filter: ZuptUkfConfig | None = None
     tune_min_stance: bool = False
     #: Divergence: horizontal error beyond this + fraction × distance walked.
@@ -104,17 +108,23 @@ class FootZuptConfig(EnvConfig):
 
     def __post_init__(self) -> None:
         self.check_env_settings(sample="IMU sample")
+        require_family(self.filter_family)
         if self.filter is None:
-            calibrate = self.scenario == "random"
-            object.__setattr__(self, "filter", ZuptUkfConfig(calibrate_gyro_bias=calibrate))
+            object.__setattr__(self, "filter", family_filter(self.filter_family, self.scenario))
+        family_knobs(self.filter_family, self.filter)  # the filter fits the family
         for g in self.imu_grades:
             if g not in IMU_GRADES:
                 raise ValueError(f"imu_grades: unknown grade {g!r}; known: {sorted(IMU_GRADES)}")
         require_weights("imu_grade_weights", self.imu_grade_weights, len(self.imu_grades))
 
     @property
+    def knobs(self) -> tuple[Knob, ...]:
+        """The family's four knobs around ``filter`` (the minimum stance apart)."""
+        return family_knobs(self.filter_family, self.filter)
+
+    @property
     def action_dim(self) -> int:
-        return len(ACTION_KNOBS) + int(self.tune_min_stance)
+        return len(self.knobs) + int(self.tune_min_stance)
 
     @property
     def max_samples(self) -> int:
@@ -199,6 +209,11 @@ class FootZuptCore:
         self.last_error = np.zeros(n)
         self.lanes = np.arange(n)
         self.obs_low, self.obs_high = obs_bounds(OBS_FEATURES, config.action_dim)
+        self.knobs = config.knobs
+        det = config.filter.detector
+        self.shoe = ShoeStatistic(det, config.rate_hz) if self.engine.uses_shoe else None
+        #: SHOE statistic window of each lane (s), set by the shoe family's knob.
+        self.shoe_window_s = np.full(n, getattr(det, "window_s", np.nan))
 
     # ------------------------------------------------------------------ reset
     def load_lane(
@@ -263,21 +278,29 @@ class FootZuptCore:
     def _apply_action(self, lanes: NDArray[np.integer]) -> None:
         a = self.action[lanes]
         e = self.engine
-        values = [knob.value(a[:, i]) for i, knob in enumerate(ACTION_KNOBS)]
-        e.omega_max[lanes], e.delta_f_max[lanes] = values[0], values[1]
-        e.process_noise_scale[lanes], e.zupt_noise_scale[lanes] = values[2], values[3]
+        values = {knob.name: knob.value(a[:, i]) for i, knob in enumerate(self.knobs)}
+        if self.shoe is None:
+            e.omega_max[lanes], e.delta_f_max[lanes] = values["omega_max"], values["delta_f_max"]
+        else:
+            e.shoe_threshold[lanes] = values["shoe_threshold"]
+            self.shoe_window_s[lanes] = values["shoe_window_s"]
+        e.process_noise_scale[lanes] = values["process_noise_scale"]
+        e.zupt_noise_scale[lanes] = values["zupt_noise_scale"]
         if self.config.tune_min_stance:
             e.min_stance_s[lanes] = MIN_STANCE_MAX_S * np.maximum(a[:, 4], 0.0)
 
     def knob_values(self) -> dict[str, Array]:
         """Current physical value of every knob, per lane."""
         e = self.engine
-        out = {
-            "omega_max": e.omega_max.copy(),
-            "delta_f_max": e.delta_f_max.copy(),
-            "process_noise_scale": e.process_noise_scale.copy(),
-            "zupt_noise_scale": e.zupt_noise_scale.copy(),
-        }
+        if self.shoe is None:
+            out = {"omega_max": e.omega_max.copy(), "delta_f_max": e.delta_f_max.copy()}
+        else:
+            out = {
+                "shoe_threshold": e.shoe_threshold.copy(),
+                "shoe_window_s": self.shoe_window_s.copy(),
+            }
+        out["process_noise_scale"] = e.process_noise_scale.copy()
+        out["zupt_noise_scale"] = e.zupt_noise_scale.copy()
         if self.config.tune_min_stance:
             out["min_stance_s"] = e.min_stance_s.copy()
         return out
@@ -298,7 +321,10 @@ class FootZuptCore:
         omega = self.omega[self.lanes[:, None], idx]  # (N, K, 3)
         f = self.f[self.lanes[:, None], idx]
         updates0, rejected0 = e.updates.copy(), e.rejected.copy()
-        res = e.advance(omega, f, valid=used)  # the whole interval in one call
+        shoe = None
+        if self.shoe is not None:
+            shoe = self.shoe.interval(self.omega, self.f, self.cursor, k, self.shoe_window_s)
+        res = e.advance(omega, f, shoe, valid=used)  # the whole interval in one call
         in_walk = np.arange(k)[None, :] < used[:, None]
         start, end = res.start & in_walk, res.end & in_walk
         starts = start.sum(axis=1)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -21,7 +22,7 @@ class ReplayFront:
     env_id = ENV_ID
     core_cls = FootReplayCore
     config_cls = FootReplayConfig
-    arguments = ("data_dir", "decision_interval_s", "tune_min_stance")
+    arguments = ("data_dir", "filter", "decision_interval_s", "tune_min_stance")
     core: FootReplayCore
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
@@ -35,6 +36,11 @@ class ReplayFront:
         if data_dir is not None:  # a path-like is kept as its string
             arguments = {**arguments, "data_dir": str(data_dir)}
         return super().build_config(config, arguments)  # type: ignore[misc]
+
+    @staticmethod
+    def with_family(config: FootReplayConfig, family: str) -> FootReplayConfig:
+        """``config`` with filter family ``family`` and that family's setup."""
+        return replace(config, filter_family=family, setup=None)
 
     def action_dim(self) -> int:
         return int(self.core.config.action_dim)

@@ -35,11 +35,12 @@ from pednav_env.envs.spec import require_nonnegative, require_positive
 from pednav_env.io.load import find_recordings, load_recording
 from pednav_env.io.recording import Recording
 from pednav_env.io.validate import LoadOptions
-from pednav_env.nav.detectors import ThresholdDetectorConfig, causal_moving_mean, window_samples
+from pednav_env.envs.foot_filters import family_knobs, require_family
+from pednav_env.nav.detectors import causal_moving_mean, window_samples
 from pednav_env.nav.zupt_config import ZuptUkfConfig
 from pednav_env.replay.metrics import best_rotation, rotate_h
 from pednav_env.replay.runner import PreparedRecording, prepare, run_prepared
-from pednav_env.replay.setup import RealFilterSetup, named_setup
+from pednav_env.replay.setup import RealFilterSetup, named_setup, real_fixed_setup
 
 Array = NDArray[np.float64]
 
@@ -49,10 +50,13 @@ TRUTH_STANCE_SPEED = 0.15
 TRUTH_SMOOTHING_S = 0.05
 
 
-def _default_setup() -> RealFilterSetup:
-    # Action 0 = the simulated env's action-0 filter (FootZuptConfig, random
-    # scenario): eq (5) at 0.22 rad/s / 0.33 m/s², gyro-bias calibration.
-    return RealFilterSetup(filter=ZuptUkfConfig(calibrate_gyro_bias=True))
+def family_setup(family: str) -> RealFilterSetup:
+    """Action 0 of ``family`` = the simulated env's action-0 filter: paper — eq (5)
+    at 0.22 rad/s / 0.33 m/s², gyro-bias calibration (FootZuptConfig, random
+    scenario); shoe — the ``real-fixed`` setup."""
+    if require_family(family) == "paper":
+        return RealFilterSetup(filter=ZuptUkfConfig(calibrate_gyro_bias=True))
+    return real_fixed_setup()
 
 
 @dataclass(frozen=True)
@@ -62,14 +66,18 @@ class FootReplayConfig:
     ``data_dir``: a directory of recordings with truth (``.mat``/``.csv``,
     see :mod:`pednav_env.io`), all at one sample rate (±1 %); required by the
     environments (the core can also replay in-memory recordings).
-    ``setup``: the filter at action 0 and the real-data steps; its detector
-    must be eq (5) (the knobs set its thresholds). ``reference``: the named
-    setup whose run fixes the truth heading (``real-fixed``).
+    ``filter_family`` (``gym.make`` argument ``filter``): ``"paper"`` or
+    ``"shoe"`` (:mod:`pednav_env.envs.foot_filters`).
+    ``setup``: the filter at action 0 and the real-data steps (None: the
+    family's, :func:`family_setup`); its detector must be the family's (eq 5
+    or SHOE: the knobs set its thresholds). ``reference``: the named setup
+    whose run fixes the truth heading (``real-fixed``).
     """
 
     data_dir: str | None = None
     decision_interval_s: float = 0.5
-    setup: RealFilterSetup = field(default_factory=_default_setup)
+    filter_family: str = "paper"
+    setup: RealFilterSetup | None = None
     reference: str = "real-fixed"
     tune_min_stance: bool = False
     divergence_error_m: float = 25.0
@@ -79,11 +87,12 @@ class FootReplayConfig:
     def __post_init__(self) -> None:
         if self.data_dir is not None and not Path(self.data_dir).is_dir():
             raise ValueError(f"FootReplayConfig.data_dir: {self.data_dir!r} is not a directory")
-        if not isinstance(self.setup.filter.detector, ThresholdDetectorConfig):
-            raise ValueError(
-                "FootReplayConfig.setup: the detector must be eq (5) (ThresholdDetectorConfig): "
-                "the action sets its thresholds"
-            )
+        if self.setup is None:
+            object.__setattr__(self, "setup", family_setup(self.filter_family))
+        try:
+            family_knobs(self.filter_family, self.setup.filter)
+        except ValueError as exc:
+            raise ValueError(f"FootReplayConfig.setup: {exc}") from None
         if self.setup.gravity != "standard":
             raise ValueError("FootReplayConfig.setup.gravity must be 'standard' (one g per batch)")
         # Not an EnvConfig: the recordings set the rate and there is no scenario;
@@ -194,6 +203,7 @@ class FootReplayCore(FootZuptCore):
         foot = FootZuptConfig(
             decision_interval_s=config.decision_interval_s,
             rate_hz=rate,
+            filter_family=config.filter_family,
             filter=config.setup.filter,
             tune_min_stance=config.tune_min_stance,
             divergence_error_m=config.divergence_error_m,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -13,12 +14,36 @@ from pednav_env.envs.foot_core import (
     FootZuptConfig,
     FootZuptCore,
 )
+from pednav_env.envs.foot_filters import FILTER_FAMILIES
 from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
 
 ENV_ID = "pednav/FootZupt-v0"
 
 
-class FootZuptEnv(NativeScalarEnv):
+class FamilyFront:
+    """The ``filter`` constructor argument of the foot envs, scalar and vector."""
+
+    @classmethod
+    def build_config(cls, config: Any, arguments: dict[str, Any]) -> Any:
+        """The config, with the ``filter`` argument (a family name) as its
+        ``filter_family`` field and that family's filter at action 0 when it
+        differs from ``config``'s (``config.filter`` is the filter itself)."""
+        family = arguments.get("filter")
+        rest = {k: v for k, v in arguments.items() if k != "filter"}
+        config = super().build_config(config, rest)  # type: ignore[misc]
+        if family is None or family == config.filter_family:
+            return config
+        if not isinstance(family, str):
+            raise ValueError(f"filter: a family name {FILTER_FAMILIES}, got {family!r}")
+        return cls.with_family(config, family)
+
+    @staticmethod
+    def with_family(config: FootZuptConfig, family: str) -> FootZuptConfig:
+        """``config`` with filter family ``family`` and that family's filter."""
+        return replace(config, filter_family=family, filter=None)
+
+
+class FootZuptEnv(FamilyFront, NativeScalarEnv):
     """
     ## Description
     A walker with an IMU on the foot walks a route; a zero-velocity-update
@@ -135,7 +160,7 @@ class FootZuptEnv(NativeScalarEnv):
     env_id = ENV_ID
     core_cls = FootZuptCore
     config_cls = FootZuptConfig
-    arguments = ("scenario", "decision_interval_s", "rate_hz", "tune_min_stance")
+    arguments = ("scenario", "filter", "decision_interval_s", "rate_hz", "tune_min_stance")
     track_dim = 3
     estimate_label = "ZUPT-UKF"
 
@@ -143,7 +168,7 @@ class FootZuptEnv(NativeScalarEnv):
         return {"imu_grade": self.core.grade[0]}
 
 
-class FootZuptVectorEnv(NativeVectorEnv):
+class FootZuptVectorEnv(FamilyFront, NativeVectorEnv):
     """Native vector version of :class:`FootZuptEnv` (see its docstring):
     one batched filter for all ``num_envs`` walks, SAME_STEP autoreset."""
 

@@ -30,20 +30,39 @@ from gymnasium.vector.utils import batch_space
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import pednav_env  # noqa: F401  (registers the environments)
+from pednav_env.envs.foot_filters import FILTER_FAMILIES
 
 #: Envs whose test data hold a single episode (the replay env's one shipped trial),
 #: so that another seed cannot give another episode.
 SINGLE_EPISODE = {"pednav/FootZuptReplay-v0"}
 
-pytestmark = pytest.mark.parametrize("env_id", ENV_IDS)
+#: Envs with filter families: each family is a case of its own ("id:family").
+FAMILIES = {"pednav/FootZupt-v0": FILTER_FAMILIES, "pednav/FootZuptReplay-v0": FILTER_FAMILIES}
+CASES = [
+    f"{env_id}:{family}" if env_id in FAMILIES else env_id
+    for env_id in ENV_IDS
+    for family in FAMILIES.get(env_id, ("",))
+]
+
+pytestmark = pytest.mark.parametrize("env_id", CASES)
 
 
-def make(env_id: str, **kwargs) -> gym.Env:
-    return gym.make(env_id, **FAST_KWARGS.get(env_id, {}), **kwargs)
+def case_kwargs(case: str) -> tuple[str, dict]:
+    """(env id, constructor arguments) of a case."""
+    env_id, _, family = case.partition(":")
+    kwargs = dict(FAST_KWARGS.get(env_id, {}))
+    if family:
+        kwargs["filter"] = family
+    return env_id, kwargs
 
 
-def make_vec(env_id: str, n: int) -> gym.vector.VectorEnv:
-    kwargs = FAST_KWARGS.get(env_id, {})
+def make(case: str, **kwargs) -> gym.Env:
+    env_id, fast = case_kwargs(case)
+    return gym.make(env_id, **fast, **kwargs)
+
+
+def make_vec(case: str, n: int) -> gym.vector.VectorEnv:
+    env_id, kwargs = case_kwargs(case)
     return gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
 
 
@@ -62,7 +81,7 @@ def test_same_seed_same_episode(env_id):
     np.testing.assert_array_equal(a[0], b[0])
     np.testing.assert_array_equal(a[1], b[1])
     assert data_equivalence(a[2], b[2], exact=True)  # the last infos
-    if env_id not in SINGLE_EPISODE:
+    if env_id.partition(":")[0] not in SINGLE_EPISODE:
         assert a[0].shape != c[0].shape or not np.array_equal(a[0], c[0])
 
 
@@ -100,7 +119,7 @@ def test_vector_env_spaces_shapes_dtypes_and_seeding(env_id):
     # lane i plays the scalar env's seed + i: lanes 0, 1 with seed 12 are lanes 1, 2 with 11
     shifted = play(12)
     np.testing.assert_array_equal(shifted[:, :2], first[:, 1:])
-    if env_id not in SINGLE_EPISODE:
+    if env_id.partition(":")[0] not in SINGLE_EPISODE:
         assert not np.array_equal(shifted, first)
     venv.close()
 
@@ -179,12 +198,12 @@ def test_bad_actions_raise_with_the_env_name(env_id, bad):
         "text": np.array(["a"] * k, dtype=object),
     }.get(bad, np.where(np.arange(k) == 1, value.get(bad, 0.0), 0.0))
     env.reset(seed=0)
-    with pytest.raises(ValueError, match=env_id):
+    with pytest.raises(ValueError, match=env_id.partition(":")[0]):
         env.step(action)
     venv = make_vec(env_id, 2)
     venv.reset(seed=0)
     batch = {"short": np.zeros((2, k - 1)), "batched": np.zeros((3, k))}.get(bad)
-    with pytest.raises(ValueError, match=env_id):
+    with pytest.raises(ValueError, match=env_id.partition(":")[0]):
         venv.step(np.stack([action, np.zeros(k)]) if batch is None else batch)
     venv.close()
 
