@@ -75,6 +75,8 @@ def _env_kwargs(args: argparse.Namespace) -> dict[str, Any]:
             out[key] = text
     if args.scenario is not None:
         out["scenario"] = args.scenario
+    if getattr(args, "filter", None) is not None:
+        out["filter"] = args.filter
     if args.recordings is not None:
         if not Path(args.recordings).is_dir():
             raise ValueError(f"--recordings {args.recordings!r}: not a directory")
@@ -120,6 +122,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
         "n_envs": args.n_envs,
         "config_file": args.config,
         "resume": args.resume,
+        "filter_family": args.filter,
     }
     if args.seeds is None:
         if args.backend != "serial" or args.ray_address or args.ray_cpus:
@@ -160,10 +163,16 @@ def _cmd_tune(args: argparse.Namespace) -> int:
     import pednav_env  # noqa: F401  (registers the environments)
     from agents.evaluate import check_env_kwargs
     from agents.progress import progress_bar, wanted
-    from baselines.tuned import RESULT_NAME, RESULTS_FILE, save_result, search
+    from agents.policies import FAMILY_ENVS
+    from baselines.tuned import RESULT_NAME, RESULTS_FILE, result_key, save_result, search
+    from pednav_env.envs.foot_filters import LEARNED_FAMILY
 
     env_kwargs = _env_kwargs(args)
     check_env_kwargs(args.env_id, env_kwargs)
+    family = None
+    if args.env_id in FAMILY_ENVS:
+        family = env_kwargs.setdefault("filter", LEARNED_FAMILY)
+    key = result_key(args.env_id, family)
     action_dim = gym.make(args.env_id, **env_kwargs).action_space.shape[0]
     run_dir = Path(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/tune_seed{args.seed}")
     backend = _backend(args)
@@ -180,9 +189,9 @@ def _cmd_tune(args: argparse.Namespace) -> int:
             n_tasks=backend.workers,
             on_generation=advance,
         )
-    written = [save_result(args.env_id, result, run_dir / RESULT_NAME)]
+    written = [save_result(key, result, run_dir / RESULT_NAME)]
     if args.install:
-        written.append(save_result(args.env_id, result, RESULTS_FILE))
+        written.append(save_result(key, result, RESULTS_FILE))
     print(json.dumps(result, indent=2))
     for path in written:
         print(f"wrote {path}", file=sys.stderr)
@@ -243,6 +252,14 @@ def _add_backend_options(p: argparse.ArgumentParser, unit: str) -> None:
 def _add_env_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--scenario", default=None, help="env scenario, e.g. random or paper (the env's default)"
+    )
+    p.add_argument(
+        "--filter",
+        choices=("paper", "shoe"),
+        default=None,
+        help="foot envs: the filter family (paper: eq 5 and ZUPTs at stance start and end; "
+        "shoe: SHOE detector and a ZUPT at every stance sample, action 0 = real-fixed); "
+        "tune and train default to shoe, evaluate runs each policy on its own family",
     )
     p.add_argument(
         "--recordings",
@@ -371,6 +388,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--run-dir",
         default=None,
         help="output dir (default runs/ENV/ALGO_seedS; with --seeds: the parent, default runs/ENV)",
+    )
+    tr.add_argument(
+        "--filter",
+        choices=("paper", "shoe"),
+        default=None,
+        help="foot envs: the filter family to tune (default shoe, the one that transfers "
+        "to recordings); written to meta.json",
     )
     tr.add_argument("--resume", action="store_true", help="continue from the newest checkpoint")
     tr.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -26,6 +26,12 @@ The JSON object is described in docs/CONTRACTS.md ("pednav evaluate")::
 
 The tuned constant (``tuned``) is played whether named or not when one is shipped
 for the env, as the paper policy is, for ``vs_tuned``.
+
+Foot envs (filter families, :mod:`agents.policies`): each policy plays on its
+own family (``"filter"`` in its entry); ``vs_paper`` and ``vs_tuned`` compare it
+with its family's action 0 (``paper`` or ``real-fixed``, played whether named
+or not) and tuned constant. An env argument ``filter`` sets the family of the
+names that take one (``tuned``, ``adaptive``, ``pretrained``).
 """
 
 from __future__ import annotations
@@ -44,7 +50,7 @@ from scipy import stats
 from stable_baselines3.common.evaluation import evaluate_policy
 
 import pednav_env  # noqa: F401  (registers the environments)
-from agents.policies import BUILTIN_POLICIES, load_policy
+from agents.policies import BUILTIN_POLICIES, FAMILY_ENVS, ZERO_ACTION, load_policy
 from baselines import PaperPolicy, TunedFixedPolicy
 from pednav_env.sb3 import NativeVecEnv
 from pednav_env.seeds import check_evaluation_seeds
@@ -217,10 +223,12 @@ def summarize(
     res: list[EpisodeResult],
     paper: list[EpisodeResult],
     tuned: list[EpisodeResult] | None = None,
+    paper_name: str = "paper",
 ) -> dict[str, Any]:
     """Mean, 95 % CI (Student t), final error %, divergence rate, the mean over the
     episodes that did not diverge, the per-episode errors (seed order) and paired
-    tests against the paper policy and (when played) the tuned constant."""
+    tests against the paper policy (``paper_name``: the action 0 it stands for)
+    and (when played) the tuned constant."""
     err = np.array([r.mean_error for r in res])
     diverged = np.array([r.diverged for r in res])
     n = len(err)
@@ -229,7 +237,7 @@ def summarize(
         half = float(stats.t.ppf(0.975, n - 1) * err.std(ddof=1) / math.sqrt(n))
     else:
         half = 0.0
-    if name == "paper":
+    if name == paper_name:
         vs_paper: dict[str, Any] = {"mean_diff": 0.0, "p_value": None}
     else:
         vs_paper = paired_test(err, np.array([r.mean_error for r in paper]))
@@ -290,6 +298,10 @@ def evaluate(
     action_space = probe.action_space
     interval_s = decision_interval_s(probe)
     probe.close()
+    if env_id in FAMILY_ENVS:
+        return evaluate_families(
+            env_id, policy_names, episodes, seed, env_kwargs, plot_dir, backend, on_episode, lanes
+        )
     policies = {name: load_policy(name, action_space, env_id) for name in policy_names}
     if "paper" not in policies:
         policies = {"paper": PaperPolicy(action_space), **policies}
@@ -303,18 +315,7 @@ def evaluate(
         for name, pol in policies.items()
         for batch in episode_batches(env_id, pol, episodes, seed, env_kwargs, lanes)
     ]
-    if backend is None or backend.name == "serial":
-        played = [play_batch(batch, on_episode) for _, batch in plan]
-    else:
-
-        def done(i: int) -> None:
-            if on_episode is not None:
-                on_episode(plan[i][1].episodes)
-
-        played = backend.map(play_batch, [batch for _, batch in plan], on_done=done)
-    outcomes: dict[str, list[EpisodeResult]] = {name: [] for name in policies}
-    for (name, _), results in zip(plan, played, strict=True):
-        outcomes[name].extend(results)
+    outcomes = play_plan(plan, backend, on_episode)
     if plot_dir is not None:
         from agents.evaluate_report import write_plots
 
@@ -328,3 +329,89 @@ def evaluate(
             for name in policy_names
         ],
     }
+
+
+def play_plan(
+    plan: list[tuple[Any, EpisodeBatch]],
+    backend: Any,
+    on_episode: Callable[[int], None] | None,
+) -> dict[Any, list[EpisodeResult]]:
+    """Play every (key, batch) of ``plan``; the results of each key in seed order."""
+    if backend is None or backend.name == "serial":
+        played = [play_batch(batch, on_episode) for _, batch in plan]
+    else:
+
+        def done(i: int) -> None:
+            if on_episode is not None:
+                on_episode(plan[i][1].episodes)
+
+        played = backend.map(play_batch, [batch for _, batch in plan], on_done=done)
+    outcomes: dict[Any, list[EpisodeResult]] = {key: [] for key, _ in plan}
+    for (key, _), results in zip(plan, played, strict=True):
+        outcomes[key].extend(results)
+    return outcomes
+
+
+def evaluate_families(
+    env_id: str,
+    policy_names: list[str],
+    episodes: int,
+    seed: int,
+    env_kwargs: dict[str, Any],
+    plot_dir: str | Path | None,
+    backend: Any,
+    on_episode: Callable[[int], None] | None,
+    lanes: int,
+) -> dict[str, Any]:
+    """:func:`evaluate` on an env with filter families: each policy on its own family,
+    compared with that family's action 0 and tuned constant (module docstring)."""
+    forced = env_kwargs.pop("filter", None)
+    probe = gym.make(env_id, **env_kwargs)
+    action_space, interval_s = probe.action_space, decision_interval_s(probe)
+    probe.close()
+    named = [
+        (name, load_policy(name, action_space, env_id, filter_family=forced))
+        for name in policy_names
+    ]
+    policies: dict[tuple[str, str], Any] = {}
+    for name, pol in named:
+        family = pol.filter_family or "paper"
+        zero = ZERO_ACTION[family]
+        if (family, zero) not in policies:
+            policies[(family, zero)] = load_policy(zero, action_space, env_id)
+        policies[(family, name)] = pol
+        if (family, "tuned") not in policies:
+            try:  # the comparison every tuner must win, when a constant is shipped
+                tuned = load_policy("tuned", action_space, env_id, filter_family=family)
+                policies[(family, "tuned")] = tuned
+            except ValueError:
+                pass
+    plan = [
+        (key, batch)
+        for key, pol in policies.items()
+        for batch in episode_batches(
+            env_id, pol, episodes, seed, {**env_kwargs, "filter": key[0]}, lanes
+        )
+    ]
+    outcomes = play_plan(plan, backend, on_episode)
+    if plot_dir is not None:
+        from agents.evaluate_report import write_plots
+
+        by_name = {
+            name if fam == "paper" else f"{name}:{fam}": res
+            for (fam, name), res in outcomes.items()
+        }
+        write_plots(env_id, by_name, Path(plot_dir), interval_s)
+    entries = []
+    for name, pol in named:
+        family = pol.filter_family or "paper"
+        zero = ZERO_ACTION[family]
+        entry = summarize(
+            name,
+            outcomes[(family, name)],
+            outcomes[(family, zero)],
+            outcomes.get((family, "tuned")),
+            paper_name=zero,
+        )
+        entries.append({**entry, "filter": family})
+    return {"env": env_id, "episodes": episodes, "seed": seed, "policies": entries}

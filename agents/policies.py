@@ -2,7 +2,18 @@
 
 Names: ``paper`` (action 0), ``tuned`` (the shipped best constant action),
 ``adaptive`` (the innovation-based rule), ``pretrained`` (the shipped tuner
-under ``agents/pretrained/``). Paths: a run directory of ``pednav train``
+under ``agents/pretrained/``), and for the foot envs ``real-fixed`` (action 0
+of the shoe filter family).
+
+Filter families (foot envs, :mod:`pednav_env.envs.foot_filters`): every policy
+carries the family it is made for as ``filter_family`` (None on the other
+envs). ``paper`` is always the paper family and ``real-fixed`` the shoe
+family; ``tuned``, ``adaptive`` and ``pretrained`` take the family asked for
+(``NAME:FAMILY``, e.g. ``tuned:paper``, or the caller's ``filter_family``),
+by default :data:`~pednav_env.envs.foot_filters.LEARNED_FAMILY` (shoe); a
+training run carries its family in ``meta.json`` (``"filter"``, paper for
+runs that have none) and a tuned-actions file in its keys
+(:func:`baselines.tuned.result_key`). Paths: a run directory of ``pednav train``
 (``model.zip``, ``vecnormalize.pkl``, ``meta.json``), a saved SB3 model
 (``.zip``), a tuned-actions JSON file written by ``pednav tune``, or a tune run
 directory holding one.
@@ -24,8 +35,9 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from baselines import InnovationAdaptivePolicy, PaperPolicy, TunedFixedPolicy
+from baselines import InnovationAdaptivePolicy, PaperPolicy, RealFixedPolicy, TunedFixedPolicy
 from baselines.tuned import RESULT_NAME
+from pednav_env.envs.foot_filters import FILTER_FAMILIES, LEARNED_FAMILY, require_family
 
 #: Shipped tuners: agents/pretrained/<env name>/.
 PRETRAINED_DIR = Path(__file__).parent / "pretrained"
@@ -36,10 +48,25 @@ STATS_NAME = "vecnormalize.pkl"
 #: Envs that play another env's named policies (same spaces and knobs): the replay
 #: env runs the tuners made in simulation.
 POLICY_SOURCE_ENV = {"pednav/FootZuptReplay-v0": "pednav/FootZupt-v0"}
+#: Envs with filter families (the ``filter`` constructor argument).
+FAMILY_ENVS = ("pednav/FootZupt-v0", "pednav/FootZuptReplay-v0")
+#: The policy that is action 0 of each filter family.
+ZERO_ACTION = {"paper": "paper", "shoe": "real-fixed"}
+
+
+def split_name(name: str) -> tuple[str, str | None]:
+    """``"tuned:shoe"`` → ``("tuned", "shoe")``; a name without a family suffix → (name, None)."""
+    base, sep, family = name.rpartition(":")
+    if sep and family in FILTER_FAMILIES and base:
+        return base, family
+    return name, None
 
 
 class NormalizedModelPolicy:
     """An SB3 model with frozen observation normalisation."""
+
+    #: The filter family of the run (from its meta.json), None when it has none.
+    filter_family: str | None = None
 
     def __init__(self, model: Any, obs_rms: Any | None, clip_obs: float, epsilon: float) -> None:
         self.model = model
@@ -88,10 +115,13 @@ def load_run(path: str | Path) -> NormalizedModelPolicy:
     if model is None:
         raise ValueError(f"policy {str(path)!r}: not a PPO or SAC model")
     stats_file = model_file.parent / STATS_NAME
+    family = meta.get("filter", "paper" if meta.get("env_id") in FAMILY_ENVS else None)
     if stats_file.exists():
         with stats_file.open("rb") as fh:
             vn = pickle.load(fh)
-        return NormalizedModelPolicy(model, vn.obs_rms, vn.clip_obs, vn.epsilon)
+        policy = NormalizedModelPolicy(model, vn.obs_rms, vn.clip_obs, vn.epsilon)
+        policy.filter_family = family
+        return policy
     normalized = (meta.get("hyperparams") or {}).get("normalize", {}).get("norm_obs")
     known = " (its meta.json says it was trained with VecNormalize)" if normalized else ""
     warnings.warn(
@@ -101,12 +131,18 @@ def load_run(path: str | Path) -> NormalizedModelPolicy:
         UserWarning,
         stacklevel=2,
     )
-    return NormalizedModelPolicy(model, None, 10.0, 1e-8)
+    policy = NormalizedModelPolicy(model, None, 10.0, 1e-8)
+    policy.filter_family = family
+    return policy
 
 
-def pretrained_dir(env_id: str) -> Path:
-    """Directory of the shipped tuner for ``env_id`` (e.g. pednav/FootZupt-v0)."""
-    return PRETRAINED_DIR / env_id.split("/")[-1]
+def pretrained_dir(env_id: str, filter_family: str | None = None) -> Path:
+    """Directory of the shipped tuner for ``env_id`` (e.g. pednav/FootZupt-v0;
+    ``FootZupt-v0-shoe`` for a filter family other than the paper's)."""
+    name = env_id.split("/")[-1]
+    return PRETRAINED_DIR / (
+        name if filter_family in (None, "paper") else f"{name}-{filter_family}"
+    )
 
 
 def load_policy(
@@ -114,34 +150,52 @@ def load_policy(
     action_space: spaces.Box,
     env_id: str = "",
     other_names: Sequence[str] = (),
+    filter_family: str | None = None,
 ) -> Any:
     """A policy by name, or from a path (see the module docstring).
 
     ``other_names``: names the caller handles itself (e.g. ``real-fixed`` in
     ``pednav run``), listed in the error for an unknown name. The named policies
     of an env in :data:`POLICY_SOURCE_ENV` are those of its source env.
+    ``filter_family``: the family of ``tuned``/``adaptive``/``pretrained`` and of
+    a path on an env with families (None: the name's suffix, the run's own, or
+    :data:`LEARNED_FAMILY`).
     """
+    families = env_id in FAMILY_ENVS
     env_id = POLICY_SOURCE_ENV.get(env_id, env_id)
+    name, suffix = split_name(name)
+    if filter_family is not None:
+        require_family(filter_family)
+    family = (suffix or filter_family) if families else None
+    learned = (family or LEARNED_FAMILY) if families else None
     if name == "paper":
         return PaperPolicy(action_space)
+    if name == "real-fixed" and families and "real-fixed" not in other_names:
+        return RealFixedPolicy(action_space)
     if name == "tuned":
-        return TunedFixedPolicy.for_env(env_id, action_space)
+        return TunedFixedPolicy.for_env(env_id, action_space, learned)
     if name == "adaptive":
-        return InnovationAdaptivePolicy(action_space, env_id)
+        return InnovationAdaptivePolicy(action_space, env_id, learned)
     if name == "pretrained":
-        path = pretrained_dir(env_id)
+        path = pretrained_dir(env_id, learned)
         if not (path / "model.zip").exists():
-            raise ValueError(f"no pretrained tuner shipped for {env_id!r} (looked in {path})")
+            what = env_id if learned is None else f"{env_id} (filter family {learned})"
+            raise ValueError(f"no pretrained tuner shipped for {what} (looked in {path})")
         return load_run(path)
     path = Path(name)
     if path.suffix == ".json":
         if not path.is_file():
             raise ValueError(f"policy {name!r}: no such tuned-actions file")
-        return TunedFixedPolicy.from_file(path, env_id, action_space)
+        return TunedFixedPolicy.from_file(path, env_id, action_space, family)
     if path.is_dir() and not (path / "model.zip").exists() and (path / RESULT_NAME).exists():
-        return TunedFixedPolicy.from_file(path / RESULT_NAME, env_id, action_space)
+        return TunedFixedPolicy.from_file(path / RESULT_NAME, env_id, action_space, family)
     if path.suffix == ".zip" or path.exists():
-        return load_run(path)
+        policy = load_run(path)
+        if family is not None and policy.filter_family not in (None, family):
+            raise ValueError(
+                f"policy {name!r} was trained with filter {policy.filter_family!r}, not {family!r}"
+            )
+        return policy
     names = ", ".join((*BUILTIN_POLICIES, *other_names))
     raise ValueError(
         f"unknown policy {name!r}: use one of {names}, or a path to a training run directory, "

@@ -37,6 +37,8 @@ import yaml
 
 import pednav_env  # noqa: F401  (registers the environments)
 from agents.backends import one_torch_thread
+from agents.policies import FAMILY_ENVS
+from pednav_env.envs.foot_filters import LEARNED_FAMILY
 from pednav_env.sb3 import NativeVecEnv
 from pednav_env.seeds import training_seed
 
@@ -80,8 +82,11 @@ def train(
     resume: bool = False,
     progress_bar: bool = True,
     hyperparams: dict[str, Any] | None = None,
+    filter_family: str | None = None,
 ) -> Path:
-    """Train and save; returns the run directory."""
+    """Train and save; returns the run directory. ``filter_family``: the foot envs'
+    filter family (default :data:`~pednav_env.envs.foot_filters.LEARNED_FAMILY`),
+    kept in meta.json as ``"filter"``."""
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import CheckpointCallback
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
@@ -93,7 +98,11 @@ def train(
     if timesteps < 1 or n_envs < 1:
         raise ValueError(f"timesteps and n_envs must be ≥ 1, got {timesteps}, {n_envs}")
     normalize = hp.get("normalize", {"norm_obs": True, "norm_reward": True})
-    env_kwargs = hp.get("env_kwargs", {})
+    env_kwargs = dict(hp.get("env_kwargs", {}))
+    family = None
+    if env_id in FAMILY_ENVS:
+        family = filter_family or env_kwargs.get("filter") or LEARNED_FAMILY
+        env_kwargs["filter"] = family
     checkpoint_steps = int(hp.get("checkpoint_steps", 50_000))
     algo_kwargs = {k: v for k, v in hp.items() if k not in RUN_KEYS}
     policy = algo_kwargs.pop("policy", "MlpPolicy")
@@ -160,6 +169,8 @@ def train(
         "resumes": resumes,
         "command": " ".join(sys.argv),
     }
+    if family is not None:
+        meta["filter"] = family
     meta_file.write_text(json.dumps(meta, indent=2, default=str))
     vec.close()
     return run_dir
@@ -185,6 +196,7 @@ class TrainJob:
     resume: bool = False
     progress_bar: bool = False
     hyperparams: dict[str, Any] = field(default_factory=dict)
+    filter_family: str | None = None
 
 
 def run_job(job: TrainJob) -> Path:
@@ -200,6 +212,7 @@ def run_job(job: TrainJob) -> Path:
         job.resume,
         progress_bar=job.progress_bar,
         hyperparams=job.hyperparams,
+        filter_family=job.filter_family,
     )
 
 

@@ -2,7 +2,7 @@
 trained agent and a baseline go through the same evaluation."""
 
 from baselines.adaptive import InnovationAdaptivePolicy
-from baselines.paper import PaperPolicy
+from baselines.paper import PaperPolicy, RealFixedPolicy
 from baselines.tuned import TunedFixedPolicy
 
-__all__ = ["InnovationAdaptivePolicy", "PaperPolicy", "TunedFixedPolicy"]
+__all__ = ["InnovationAdaptivePolicy", "PaperPolicy", "RealFixedPolicy", "TunedFixedPolicy"]

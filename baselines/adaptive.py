@@ -36,6 +36,11 @@ For ``pednav/FootZupt-v0``:
   within [0.05, 2.0] rad/s and [0.1, 3.0] m/s²; the paper's thresholds while
   nearly still (mean|ω'| < 0.3 rad/s).
 
+For the foot env's ``shoe`` filter family (SHOE detector, a ZUPT at every
+stance sample, action 0 = ``real-fixed``) the same innovation matching moves
+the process-noise scale; γ, the window and R stay at ``real-fixed``'s values
+(no gait rule: the SHOE statistic is already normalised by the sensor noise).
+
 The two factors were chosen among (0.12, 0.08), (0.05, 0.04), (0.03, 0.03),
 (0.02, 0.02) and (0.03, 0.06) by the mean time-averaged error on 24
 *training* episodes (seeds 2 000 000 – 2 000 023; paper policy 18.1 m, the
@@ -73,11 +78,21 @@ class InnovationAdaptivePolicy:
     accel_factor = 0.03
     RULES = ("pednav/FootZupt-v0", "pednav/WaistStep-v0", "pednav/MarkerTrack-v0")
 
-    def __init__(self, action_space: spaces.Box, env_id: str = "pednav/FootZupt-v0") -> None:
+    def __init__(
+        self,
+        action_space: spaces.Box,
+        env_id: str = "pednav/FootZupt-v0",
+        filter_family: str | None = None,
+    ) -> None:
         if env_id not in self.RULES:
             raise ValueError(f"no innovation-adaptive rule for {env_id!r}; rules: {self.RULES}")
+        foot = env_id == "pednav/FootZupt-v0"
+        if foot and filter_family not in (None, "paper", "shoe"):
+            raise ValueError(f"filter_family must be 'paper' or 'shoe', got {filter_family!r}")
         self.action_space = action_space
         self.env_id = env_id
+        #: The foot env's filter family (paper when not given); None elsewhere.
+        self.filter_family = (filter_family or "paper") if foot else None
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
@@ -92,6 +107,8 @@ class InnovationAdaptivePolicy:
     def _foot(self, obs: np.ndarray) -> np.ndarray:
         k = len(OBS_FEATURES)
         current = obs[:, k : k + self.action_space.shape[0]]
+        if self.filter_family == "shoe":
+            return self._foot_shoe(obs, current)
         a = current.copy()
         moving = obs[:, _IDX["gyro_norm_mean"]]
         omega_max = np.clip(self.omega_factor * moving, 0.05, 2.0)
@@ -101,6 +118,14 @@ class InnovationAdaptivePolicy:
         a[:, 1] = np.where(still, 0.0, ACTION_KNOBS[1].action(delta_f))
         log_nis = obs[:, _IDX["log_nis_interval"]]
         step = _nis_step(log_nis, 4.0, ACTION_KNOBS[2].span, self.eta)
+        a[:, 2] = np.where(log_nis > 0, current[:, 2] + step, current[:, 2])
+        return a
+
+    def _foot_shoe(self, obs: np.ndarray, current: np.ndarray) -> np.ndarray:
+        a = current.copy()
+        a[:, 0] = a[:, 1] = 0.0  # γ and window at real-fixed's values
+        log_nis = obs[:, _IDX["log_nis_interval"]]
+        step = _nis_step(log_nis, 4.0, ACTION_KNOBS[2].span, self.eta)  # same span, 100
         a[:, 2] = np.where(log_nis > 0, current[:, 2] + step, current[:, 2])
         return a
 

@@ -20,6 +20,8 @@ class PaperPolicy:
     """
 
     name = "paper"
+    #: The filter family the policy is made for (pednav_env.envs.foot_filters).
+    filter_family = "paper"
 
     def __init__(self, action_space: spaces.Box) -> None:
         if not isinstance(action_space, spaces.Box):
@@ -37,3 +39,12 @@ class PaperPolicy:
         obs = np.asarray(observation)
         batch = obs.shape[:-1]
         return np.zeros(batch + self.action_space.shape, dtype=self.action_space.dtype), state
+
+
+class RealFixedPolicy(PaperPolicy):
+    """Action 0 of the foot envs' ``shoe`` filter family: the ``real-fixed``
+    filter (SHOE detector, a ZUPT at every stance sample), unchanged for the
+    whole walk."""
+
+    name = "real-fixed"
+    filter_family = "shoe"

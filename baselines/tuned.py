@@ -8,7 +8,9 @@ bounds [-1, 1]. Every generation runs as batched vector envs with a lane per
 (candidate, episode); ``map_fn``/``n_tasks`` spread a generation's candidates
 over several workers (lanes are independent, so the split changes no result).
 
-Results are tables ``{env_id: result}`` in JSON files (:func:`save_result`).
+Results are tables ``{key: result}`` in JSON files (:func:`save_result`); the key
+is the env id, with ``:shoe`` appended for the foot envs' shoe filter family
+(:func:`result_key`; the paper family keeps the bare env id).
 The shipped table is ``tuned_actions.json`` beside this module
 (:data:`RESULTS_FILE`); ``TunedFixedPolicy.for_env`` reads it and
 ``TunedFixedPolicy.from_file`` reads any other.
@@ -37,12 +39,22 @@ RESULT_NAME = "tuned_actions.json"
 MapFn = Callable[[Callable[[Any], Any], Sequence[Any]], Sequence[Any]]
 
 
+def result_key(env_id: str, filter_family: str | None = None) -> str:
+    """Key of a search result: ``env_id``, plus ``:family`` for a filter family other
+    than the paper's."""
+    return env_id if filter_family in (None, "paper") else f"{env_id}:{filter_family}"
+
+
 class TunedFixedPolicy:
-    """A constant action (SB3 ``predict`` signature)."""
+    """A constant action (SB3 ``predict`` signature) of one filter family (None:
+    an env without families)."""
 
     name = "tuned"
 
-    def __init__(self, action: np.ndarray, action_space: spaces.Box) -> None:
+    def __init__(
+        self, action: np.ndarray, action_space: spaces.Box, filter_family: str | None = None
+    ) -> None:
+        self.filter_family = filter_family
         a = np.asarray(action, dtype=np.float32)
         if a.shape != action_space.shape or not np.all(np.isfinite(a)):
             raise ValueError(f"action {a.tolist()} does not fit {action_space}")
@@ -50,24 +62,39 @@ class TunedFixedPolicy:
         self.action_space = action_space
 
     @classmethod
-    def for_env(cls, env_id: str, action_space: spaces.Box) -> TunedFixedPolicy:
-        """The shipped search result for ``env_id``."""
+    def for_env(
+        cls, env_id: str, action_space: spaces.Box, filter_family: str | None = None
+    ) -> TunedFixedPolicy:
+        """The shipped search result for ``env_id`` (and filter family)."""
         table = read_results(RESULTS_FILE) if RESULTS_FILE.exists() else {}
-        if env_id not in table:
+        key = result_key(env_id, filter_family)
+        if key not in table:
+            flag = f" --filter {filter_family}" if filter_family else ""
             raise ValueError(
-                f"no tuned-fixed action for {env_id!r} yet: run `pednav tune {env_id}`"
+                f"no tuned-fixed action for {key!r} yet: run `pednav tune {env_id}{flag}`"
             )
-        return cls(np.array(table[env_id]["action"]), action_space)
+        return cls(np.array(table[key]["action"]), action_space, filter_family)
 
     @classmethod
-    def from_file(cls, path: str | Path, env_id: str, action_space: spaces.Box) -> TunedFixedPolicy:
-        """The result for ``env_id`` in a results file written by ``pednav tune``."""
+    def from_file(
+        cls,
+        path: str | Path,
+        env_id: str,
+        action_space: spaces.Box,
+        filter_family: str | None = None,
+    ) -> TunedFixedPolicy:
+        """The result for ``env_id`` (and filter family) in a results file written by
+        ``pednav tune``. ``filter_family`` None on an env with families: the file's
+        only family for ``env_id``."""
         table = read_results(Path(path))
-        if env_id not in table:
-            raise ValueError(
-                f"{path}: no tuned-fixed action for {env_id!r} (it has {sorted(table)})"
-            )
-        return cls(np.array(table[env_id]["action"]), action_space)
+        key = result_key(env_id, filter_family)
+        if filter_family is None and key not in table:
+            own = [k for k in table if k.partition(":")[0] == env_id]
+            if len(own) == 1:
+                key, filter_family = own[0], own[0].partition(":")[2] or "paper"
+        if key not in table:
+            raise ValueError(f"{path}: no tuned-fixed action for {key!r} (it has {sorted(table)})")
+        return cls(np.array(table[key]["action"]), action_space, filter_family)
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         batch = np.asarray(observation).shape[:-1]
@@ -89,8 +116,8 @@ def read_results(path: Path) -> dict[str, Any]:
 
 
 def save_result(env_id: str, result: dict[str, Any], path: Path) -> Path:
-    """Write ``result`` as the entry of ``env_id`` in the table at ``path`` (other
-    entries kept); returns ``path``."""
+    """Write ``result`` as the entry ``env_id`` (a :func:`result_key`) in the table
+    at ``path`` (other entries kept); returns ``path``."""
     table = read_results(path) if path.exists() else {}
     table[env_id] = result
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -75,7 +75,9 @@ def shoe_knobs(filt: ZuptUkfConfig) -> tuple[Knob, ...]:
     """The shoe family's knobs around the SHOE filter ``filt`` (its values at a = 0)."""
     det = filt.detector
     if not isinstance(det, ShoeDetectorConfig):
-        raise ValueError("filter='shoe' needs a SHOE detector (ShoeDetectorConfig) in config.filter")
+        raise ValueError(
+            "filter='shoe' needs a SHOE detector (ShoeDetectorConfig) in config.filter"
+        )
     return (
         Knob("shoe_threshold", "log", det.threshold, SHOE_SPANS["shoe_threshold"], "1"),
         Knob("shoe_window_s", "log", det.window_s, SHOE_SPANS["shoe_window_s"], "s"),

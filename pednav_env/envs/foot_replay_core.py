@@ -31,11 +31,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.envs.foot_core import FootZuptConfig, FootZuptCore
+from pednav_env.envs.foot_filters import family_knobs, require_family
 from pednav_env.envs.spec import require_nonnegative, require_positive
 from pednav_env.io.load import find_recordings, load_recording
 from pednav_env.io.recording import Recording
 from pednav_env.io.validate import LoadOptions
-from pednav_env.envs.foot_filters import family_knobs, require_family
 from pednav_env.nav.detectors import causal_moving_mean, window_samples
 from pednav_env.nav.zupt_config import ZuptUkfConfig
 from pednav_env.replay.metrics import best_rotation, rotate_h

@@ -76,7 +76,9 @@ def test_evaluate_json_has_the_contract_keys_and_paired_stats(tmp_path):
             "mean_error_non_diverged",
             "episode_errors",
             "vs_tuned",
+            "filter",  # the foot env's filter family the policy played on
         }
+        assert p["filter"] == "paper"  # a run without meta.json: the paper family
         lo, hi = p["ci95"]
         assert lo <= p["mean_error"] <= hi
         assert 0.0 <= p["divergence_rate"] <= 1.0
