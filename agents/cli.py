@@ -162,8 +162,8 @@ def _cmd_tune(args: argparse.Namespace) -> int:
 
     import pednav_env  # noqa: F401  (registers the environments)
     from agents.evaluate import check_env_kwargs
-    from agents.progress import progress_bar, wanted
     from agents.policies import FAMILY_ENVS
+    from agents.progress import progress_bar, wanted
     from baselines.tuned import RESULT_NAME, RESULTS_FILE, result_key, save_result, search
     from pednav_env.envs.foot_filters import LEARNED_FAMILY
 

@@ -16,12 +16,13 @@ navigation. A decision interval is ``decision_interval_s`` of IMU data
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass, field, replace
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
+from pednav_env.envs.foot_context import grade_code, interval_context
 from pednav_env.envs.foot_filters import (
     MIN_STANCE_MAX_S,
     PAPER_KNOBS,
@@ -41,10 +42,13 @@ from pednav_env.envs.spec import (
 from pednav_env.gait.foot import FootSimConfig, simulate_foot
 from pednav_env.gait.foot_route import (
     RouteRandomization,
+    SpeedRouteConfig,
     paper_stride_shape,
     random_route,
+    speed_route,
     square_route,
 )
+from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.nav.detectors import run_lengths
 from pednav_env.nav.zupt_config import ZuptUkfConfig
 from pednav_env.nav.zupt_ukf import ZuptUkf
@@ -80,16 +84,30 @@ OBS_FEATURES: tuple[ObsFeature, ...] = (
 class FootZuptConfig(EnvConfig):
     """Settings of the foot environment (all lanes share them).
 
-    ``scenario``: ``"random"`` (domain randomisation) or ``"paper"`` (paper
-    003's square walk, 1 m strides, its IMU). ``filter_family`` (``gym.make``
+    ``scenario``: ``"random"`` (domain randomisation), ``"paper"`` (paper
+    003's square walk, 1 m strides, its IMU) or ``"calibrated"`` (the
+    simulator calibrated on recordings: walks of ``speed_route``, walker
+    stance dynamics of :meth:`StanceRandomization.calibrated`, the IMU grades
+    ``calibrated_imu_grades``); None = ``"calibrated"`` for the shoe filter
+    family, ``"random"`` for the paper family. ``filter_family`` (``gym.make``
     argument ``filter``): ``"paper"`` or ``"shoe"``
-    (:mod:`pednav_env.envs.foot_filters`).
+    (:mod:`pednav_env.envs.foot_filters`). ``rate_hz`` None = 200 Hz in the
+    calibrated scenario (the recordings' rate), else 100 Hz (paper 003).
     """
 
-    scenario: str = "random"
+    SCENARIOS: ClassVar[tuple[str, ...]] = ("random", "paper", "calibrated")
+    scenario: str | None = None
     decision_interval_s: float = 0.5
-    rate_hz: float = 100.0  # paper 003
+    rate_hz: float | None = None
     route: RouteRandomization = field(default_factory=RouteRandomization)
+    #: Calibrated scenario: every stride's speed in 0.3–3 m/s, a new speed per
+    #: leg, turns between legs, stops of 1–8 s before a quarter of the legs.
+    speed_route: SpeedRouteConfig = field(
+        default_factory=lambda: SpeedRouteConfig(
+            speed_mps=(0.3, 3.0), duration_s=(60.0, 120.0), stop_probability=0.25, stop_s=(1.0, 8.0)
+        )
+    )
+    calibrated_imu_grades: tuple[str, ...] = ("microstrain_gx5",)
     #: IMU grades drawn per episode and their weights (random scenario).
     imu_grades: tuple[str, ...] = ("paper003", "adis16470", "consumer")
     imu_grade_weights: tuple[float, ...] = (0.4, 0.3, 0.3)
@@ -107,15 +125,22 @@ class FootZuptConfig(EnvConfig):
     divergence_error_fraction: float = 0.25
 
     def __post_init__(self) -> None:
-        self.check_env_settings(sample="IMU sample")
         require_family(self.filter_family)
+        if self.scenario is None:
+            scenario = "calibrated" if self.filter_family == "shoe" else "random"
+            object.__setattr__(self, "scenario", scenario)
+        if self.rate_hz is None:
+            object.__setattr__(self, "rate_hz", 200.0 if self.scenario == "calibrated" else 100.0)
+        self.check_env_settings(sample="IMU sample")
         if self.filter is None:
             object.__setattr__(self, "filter", family_filter(self.filter_family, self.scenario))
         family_knobs(self.filter_family, self.filter)  # the filter fits the family
-        for g in self.imu_grades:
+        for g in (*self.imu_grades, *self.calibrated_imu_grades):
             if g not in IMU_GRADES:
                 raise ValueError(f"imu_grades: unknown grade {g!r}; known: {sorted(IMU_GRADES)}")
         require_weights("imu_grade_weights", self.imu_grade_weights, len(self.imu_grades))
+        if not self.calibrated_imu_grades:
+            raise ValueError("calibrated_imu_grades: give at least one IMU grade")
 
     @property
     def knobs(self) -> tuple[Knob, ...]:
@@ -131,8 +156,13 @@ class FootZuptConfig(EnvConfig):
         """Capacity of the per-lane buffers (longest possible walk)."""
         if self.scenario == "paper":
             return int(math.ceil(paper_route().duration_s * self.rate_hz)) + 1
-        # random_route stops before exceeding the drawn duration; +1 s margin
-        return int(math.ceil((self.route.duration_s[1] + 1.0) * self.rate_hz)) + 1
+        # the routes stop before exceeding the drawn duration; +1 s margin
+        longest = (
+            self.speed_route.duration_s[1]
+            if self.scenario == "calibrated"
+            else self.route.duration_s[1]
+        )
+        return int(math.ceil((longest + 1.0) * self.rate_hz)) + 1
 
 
 def paper_route():
@@ -152,12 +182,22 @@ class Episode:
     imu_grade: str
 
 
+#: The calibrated walker population (stance dynamics, gait timing, swing vigour).
+CALIBRATED_WALKERS = StanceRandomization.calibrated()
+
+
 def generate_episode(config: FootZuptConfig, rng: np.random.Generator) -> Episode:
-    """Draw one episode from ``rng`` (fixed draw order: route, grade, IMU errors)."""
+    """Draw one episode from ``rng`` (fixed draw order: route, grade, IMU errors;
+    calibrated scenario: walker, route, grade, IMU errors)."""
     sim = FootSimConfig(rate_hz=config.rate_hz)
     if config.scenario == "paper":
         route = paper_route()
         grade = "paper003"
+    elif config.scenario == "calibrated":
+        walker = CALIBRATED_WALKERS.draw(rng)
+        route = speed_route(rng, replace(config.speed_route, stance_motion=walker))
+        grades = config.calibrated_imu_grades
+        grade = grades[int(rng.integers(len(grades)))] if len(grades) > 1 else grades[0]
     else:
         route = random_route(rng, config.route)
         w = np.asarray(config.imu_grade_weights, dtype=float)
@@ -201,6 +241,9 @@ class FootZuptCore:
         self.cursor = np.zeros(n, dtype=np.int64)
         self.nav_samples = np.ones(n, dtype=np.int64)
         self.grade = ["" for _ in range(n)]
+        self.grade_code = np.zeros(n, dtype=np.int64)
+        #: Privileged context of the coming interval (foot_context.CONTEXT_FIELDS).
+        self.context = np.zeros((n, 3))
         self.action = np.zeros((n, config.action_dim))
         self.clipped = np.zeros(n, dtype=np.int64)
         self.stance_avg_s = np.zeros(n)
@@ -250,6 +293,7 @@ class FootZuptCore:
             ep = generate_episode(c, rng)
             self.load_lane(lane, ep.omega_b, ep.f_b, ep.pos_n, ep.stance, ep.distance_m)
             self.grade[lane] = ep.imu_grade
+            self.grade_code[lane] = grade_code(ep.imu_grade)
         mask = np.zeros(self.n, dtype=bool)
         mask[lanes] = True
         self.engine.initialize(
@@ -261,14 +305,26 @@ class FootZuptCore:
         self.obs[lanes] = self._features(lanes, None)
 
     def _restart_episodes(self, lanes: NDArray[np.integer]) -> None:
-        """Action 0 (the paper filter) and cleared counters and stance statistics
-        for lanes whose new episode is loaded and whose filter is initialised."""
+        """Action 0 (the family's filter), cleared counters and stance statistics,
+        and the context of the first interval, for lanes whose new episode is
+        loaded and whose filter is initialised."""
+        self._update_context(lanes)
         self.action[lanes] = 0.0
         self.clipped[lanes] = 0
         self.stance_avg_s[lanes] = 0.0
         self.stance_len[lanes] = 0
         self.last_error[lanes] = 0.0
         self._apply_action(lanes)
+
+    def _update_context(self, lanes: NDArray[np.integer]) -> None:
+        self.context[lanes] = interval_context(
+            self.distance[lanes],
+            self.cursor[lanes],
+            self.length[lanes],
+            self.k,
+            self.dt,
+            self.grade_code[lanes],
+        )
 
     # ------------------------------------------------------------------ action
     def validate_action(self, action: Any) -> Array:
@@ -356,6 +412,7 @@ class FootZuptCore:
             ),
         }
         self.obs = self._features(self.lanes, interval)
+        self._update_context(self.lanes)
         info = {
             "pos_true": truth.copy(),
             "pos_est": est_end,

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from pednav_env.envs.foot_context import grade_code
 from pednav_env.envs.foot_core import FootZuptConfig, FootZuptCore
 from pednav_env.envs.foot_filters import family_knobs, require_family
 from pednav_env.envs.spec import require_nonnegative, require_positive
@@ -253,6 +254,7 @@ class FootReplayCore(FootZuptCore):
             p = tr.prepared
             self.load_lane(lane, p.omega_b, p.f_b, tr.pos_n, tr.stance, tr.distance_m)
             self.grade[lane] = "recorded"
+            self.grade_code[lane] = grade_code("recorded")
             self.trial_index[lane] = i
             self.trial_name[lane] = tr.name
             self.heading_offset[lane] = tr.heading_offset_rad

@@ -15,7 +15,7 @@ from pednav_env.envs.foot_core import (
     FootZuptCore,
 )
 from pednav_env.envs.foot_filters import FILTER_FAMILIES
-from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv
+from pednav_env.envs.native import NativeScalarEnv, NativeVectorEnv, make_config
 
 ENV_ID = "pednav/FootZupt-v0"
 
@@ -29,13 +29,15 @@ class FamilyFront:
         ``filter_family`` field and that family's filter at action 0 when it
         differs from ``config``'s (``config.filter`` is the filter itself)."""
         family = arguments.get("filter")
-        rest = {k: v for k, v in arguments.items() if k != "filter"}
-        config = super().build_config(config, rest)  # type: ignore[misc]
-        if family is None or family == config.filter_family:
-            return config
-        if not isinstance(family, str):
+        if family is not None and not isinstance(family, str):
             raise ValueError(f"filter: a family name {FILTER_FAMILIES}, got {family!r}")
-        return cls.with_family(config, family)
+        rest = {k: v for k, v in arguments.items() if k != "filter"}
+        built = super().build_config(config, rest)  # type: ignore[misc]
+        if family is None or family == built.filter_family:
+            return built
+        if config is None:  # the family's own defaults (scenario, rate, filter)
+            return make_config(cls.config_cls, None, **rest, filter_family=family)  # type: ignore[attr-defined]
+        return cls.with_family(built, family)
 
     @staticmethod
     def with_family(config: FootZuptConfig, family: str) -> FootZuptConfig:
@@ -165,7 +167,7 @@ class FootZuptEnv(FamilyFront, NativeScalarEnv):
     estimate_label = "ZUPT-UKF"
 
     def lane_info(self) -> dict[str, Any]:
-        return {"imu_grade": self.core.grade[0]}
+        return {"imu_grade": self.core.grade[0], "context": self.core.context[0].copy()}
 
 
 class FootZuptVectorEnv(FamilyFront, NativeVectorEnv):
@@ -175,7 +177,10 @@ class FootZuptVectorEnv(FamilyFront, NativeVectorEnv):
     scalar_env = FootZuptEnv
 
     def lane_info(self) -> dict[str, np.ndarray]:
-        return {"imu_grade": np.array(self.core.grade, dtype=object)}
+        return {
+            "imu_grade": np.array(self.core.grade, dtype=object),
+            "context": self.core.context.copy(),
+        }
 
 
 # ACTION_KNOBS / MIN_STANCE_MAX_S / OBS_FEATURES are re-exported for documentation tools.
