@@ -8,9 +8,11 @@ Policies:
   ``adaptive``, ``pretrained``, a run directory or a saved SB3 model): the
   policy drives the knobs online through the replay environment's core
   (``pednav/FootZuptReplay-v0``'s observation and action, so a tuner trained
-  in simulation runs unchanged); the knob values it chose in each decision
-  interval are then replayed through the same filter to record the track
-  sample by sample.
+  in simulation runs unchanged) with the policy's own filter family (shoe
+  for ``tuned``, ``adaptive`` and ``pretrained`` unless named ``NAME:paper``;
+  a training run's from its meta.json); the knob values it chose in each
+  decision interval are then replayed through the same filter to record the
+  track sample by sample.
 
 JSON keys (docs/REAL_DATA.md): ``duration_s``, ``rate_hz``,
 ``navigation_start_s``, ``distance_m``, ``final_position_m``, ``stances``;
@@ -63,10 +65,14 @@ def run_with_policy(
     from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
     from pednav_env.envs.native import lane_spaces
 
-    config = FootReplayConfig(decision_interval_s=interval_s)
+    from gymnasium import spaces
+
+    # the action space is the same for both filter families (four knobs)
+    policy = _load_policy(policy_name, spaces.Box(-1.0, 1.0, (4,), np.float32))
+    family = getattr(policy, "filter_family", None) or "paper"
+    config = FootReplayConfig(decision_interval_s=interval_s, filter_family=family)
     core = FootReplayCore(config, 1, "pednav run", recordings=[rec])
     action_space, _ = lane_spaces(core, core.config.action_dim)
-    policy = _load_policy(policy_name, action_space)
     core.reset_lanes(np.array([0]), [np.random.default_rng(0)])
     obs = core.obs.copy()
     rows: dict[str, list[np.ndarray]] = {}
@@ -113,13 +119,14 @@ def resolve_policy(name: str) -> RealFilterSetup | str:
     of a simulated-env policy (``tuned``, ``adaptive``, ``pretrained``, a run
     directory, an SB3 ``.zip``); ``ValueError`` listing the choices otherwise."""
     from agents.evaluate import BUILTIN_POLICIES
+    from agents.policies import split_name
 
     if name in SETUP_NAMES:
         return named_setup(name)
     path = Path(name)
     if path.suffix.lower() == ".json":
         return load_setup(path)
-    if name in BUILTIN_POLICIES or path.suffix == ".zip" or path.is_dir():
+    if split_name(name)[0] in BUILTIN_POLICIES or path.suffix == ".zip" or path.is_dir():
         return name
     raise ValueError(
         f"unknown policy {name!r}: use {DEFAULT_POLICY} (the default), "

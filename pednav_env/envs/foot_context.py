@@ -56,20 +56,21 @@ def grade_code(grade: str) -> int:
 
 def interval_context(
     distance_m: Array,
+    lanes: NDArray[np.integer],
     cursor: NDArray[np.integer],
     length: NDArray[np.integer],
     interval_samples: int,
     dt: float,
     grade_codes: NDArray[np.integer],
 ) -> Array:
-    """Context rows ``(B, 3)`` of lanes whose next interval starts at sample
-    ``cursor`` (B,), from their distance walked ``distance_m`` (B, T+1) and record
-    lengths ``length`` (B,) (module docstring)."""
+    """Context rows ``(B, 3)`` of ``lanes`` (B,) whose next interval starts at
+    sample ``cursor`` (B,), from the distance walked ``distance_m`` (N, T+1) of
+    every lane and the lanes' record lengths ``length`` (B,) (module docstring).
+    Reads two entries per lane."""
     half = interval_samples // 2
     lo = np.clip(cursor - half, 0, length)
     hi = np.clip(cursor + interval_samples + half, 0, length)
-    rows = np.arange(len(cursor))
-    walked = distance_m[rows, hi] - distance_m[rows, lo]
+    walked = distance_m[lanes, hi] - distance_m[lanes, lo]
     speed = np.where(hi > lo, walked / (np.maximum(hi - lo, 1) * dt), 0.0)
     band = np.searchsorted(_BAND_EDGES, speed, side="right")
     return np.stack((band.astype(float), grade_codes.astype(float), speed), axis=1)

@@ -318,7 +318,8 @@ class FootZuptCore:
 
     def _update_context(self, lanes: NDArray[np.integer]) -> None:
         self.context[lanes] = interval_context(
-            self.distance[lanes],
+            self.distance,
+            lanes,
             self.cursor[lanes],
             self.length[lanes],
             self.k,

@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from pednav_env.io.footprints import Footprints
 from pednav_env.io.recording import Recording
 from pednav_env.io.uniform import UniformSamples, to_uniform
+from pednav_env.nav.detectors import shoe_statistic_at
 from pednav_env.nav.mounting import mounting_rotation, rotate_samples
 from pednav_env.nav.zupt_model import (
     STATE_DIM,
@@ -47,6 +48,9 @@ from pednav_env.replay.start import find_still_start
 Array = NDArray[np.float64]
 
 #: Engine attributes a schedule may set (per lane, per interval).
+#: The SHOE statistic's window (s) in a schedule (the foot envs' shoe family):
+#: the statistic is then computed per interval with each lane's window.
+WINDOW_KNOB = "shoe_window_s"
 KNOBS = (
     "omega_max",
     "delta_f_max",
@@ -187,7 +191,9 @@ def run_prepared(
     knobs : name → ``(N,)`` constant knob values (names in :data:`KNOBS`).
     schedule : name → ``(K, N)`` knob values for decision interval k (the
         last row holds for later intervals); applied at the start of each
-        interval of ``interval_s``.
+        interval of ``interval_s``. Besides :data:`KNOBS`, ``shoe_window_s``
+        (:data:`WINDOW_KNOB`): the SHOE statistic is then computed per interval
+        with each lane's window, as the foot envs' shoe family does.
     """
     n = int(num_lanes)
     e = ZuptUkf(prep.setup.filter, prep.rate_hz, n)
@@ -210,13 +216,24 @@ def run_prepared(
     if shoe is not None:
         shoe = np.broadcast_to(shoe, (n, m))
     k = max(1, int(round(interval_s * prep.rate_hz)))
+    windows = (schedule or {}).get(WINDOW_KNOB)
+    if windows is not None and shoe is None:
+        raise ValueError(f"schedule: {WINDOW_KNOB!r} needs a SHOE detector")
+    if windows is not None:
+        shoe = np.zeros((n, m))  # filled interval by interval
     for interval, s0 in enumerate(range(na, m, k)):
+        s1 = min(s0 + k, m)
         if schedule:
             for name, table in schedule.items():
                 table = np.asarray(table, dtype=float)
                 row = table[min(interval, table.shape[0] - 1)]
-                set_knob(e, name, np.broadcast_to(row, (n,)))
-        s1 = min(s0 + k, m)
+                if name == WINDOW_KNOB:  # the statistic of this interval, lane windows
+                    lanes = window_samples_of(np.broadcast_to(row, (n,)), prep.rate_hz)
+                    first = np.full(n, s0)
+                    det = e.config.detector
+                    shoe[:, s0:s1] = shoe_statistic_at(w, f, first, s1 - s0, lanes, det)
+                else:
+                    set_knob(e, name, np.broadcast_to(row, (n,)))
         if not track:
             res = e.advance(
                 w[:, s0:s1],
@@ -257,6 +274,11 @@ def state_covariance(e: ZuptUkf, diagonal: bool = False) -> Array:
         e.config.assumed_imu, e.rate_hz, e.elapsed_s, e.process_noise_scale, e.model.q_basis
     )
     return spread + q
+
+
+def window_samples_of(window_s: Array, rate_hz: float) -> NDArray[np.int64]:
+    """SHOE windows (s) in samples, at least 1 (as :func:`window_samples`)."""
+    return np.maximum(1, np.round(np.asarray(window_s) * rate_hz)).astype(np.int64)
 
 
 def set_knob(e: ZuptUkf, name: str, value: Array) -> None:

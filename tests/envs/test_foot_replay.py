@@ -24,10 +24,14 @@ def env():
     e.close()
 
 
-def test_same_spaces_as_the_simulated_env(env):
-    sim = gym.make("pednav/FootZupt-v0")
-    assert env.action_space == sim.action_space
-    assert env.observation_space == sim.observation_space
+@pytest.mark.parametrize("family", ["paper", "shoe"])
+def test_same_spaces_as_the_simulated_env(family):
+    """Per filter family, a policy made in simulation fits the replay env."""
+    replay = gym.make(ENV_ID, data_dir=str(REPLAY_DATA), filter=family)
+    sim = gym.make("pednav/FootZupt-v0", filter=family)
+    assert replay.action_space == sim.action_space
+    assert replay.observation_space == sim.observation_space
+    assert replay.unwrapped.core.knobs == sim.unwrapped.core.knobs
 
 
 def test_episode_is_the_trial_and_the_return_is_minus_the_mean_error(env):
@@ -52,11 +56,14 @@ def test_bad_data_directories():
         gym.make(ENV_ID, data_dir=str(REPLAY_DATA / "nope"))
 
 
-def test_policy_schedule_replays_the_core_exactly():
+@pytest.mark.parametrize("family", ["paper", "shoe"])
+def test_policy_schedule_replays_the_core_exactly(family):
     """`pednav run` with a policy: the knob schedule recorded in the replay core,
-    replayed by the runner, gives the core's own estimate at every interval end."""
+    replayed by the runner, gives the core's own estimate at every interval end
+    (shoe family: the window knob too, the statistic per interval)."""
     rec = load_recording(REPLAY_DATA / "pyshoe_2017-11-22-11-48-35_first7s.mat")
-    core = FootReplayCore(FootReplayConfig(), 1, "test", recordings=[rec])
+    config = FootReplayConfig(filter_family=family)
+    core = FootReplayCore(config, 1, "test", recordings=[rec])
     core.reset_lanes(np.array([0]), [np.random.default_rng(0)])
     rng = np.random.default_rng(1)
     from pednav_env.replay.runner import run_prepared
