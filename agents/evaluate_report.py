@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from agents.evaluate import EpisodeResult
+from agents.policies import ZERO_ACTION
 
 #: Envs whose error does not accumulate with the distance walked: no "% of distance".
 NO_DISTANCE_PERCENT = frozenset({"pednav/MarkerTrack-v0"})
@@ -71,11 +72,31 @@ def format_table(result: dict[str, Any]) -> str:
         head,
         "-" * len(head),
     ]
-    for p in result["policies"]:
+    families = list(dict.fromkeys(p["filter"] for p in result["policies"] if "filter" in p))
+    blocks = (
+        [(None, result["policies"])]
+        if not families
+        else [(f, [p for p in result["policies"] if p.get("filter") == f]) for f in families]
+    )
+    for family, entries in blocks:
+        if family is not None:
+            zero = ZERO_ACTION[family]
+            lines.append(f"filter family {family} (action 0 = {zero}; Δ and p: paired with {zero})")
+        lines.extend(_rows(entries, show_pct))
+    return "\n".join(lines)
+
+
+def _rows(entries: list[dict[str, Any]], show_pct: bool) -> list[str]:
+    lines = []
+    for p in entries:
         lo, hi = p["ci95"]
         pv = p["vs_paper"]["p_value"]
         nd = p.get("mean_error_non_diverged")
-        diff = "—" if p["name"] == "paper" else f"{p['vs_paper']['mean_diff']:+.3f}"
+        diff = (
+            "—"
+            if pv is None and p["vs_paper"]["mean_diff"] == 0.0
+            else f"{p['vs_paper']['mean_diff']:+.3f}"
+        )
         row = [
             f"{short_name(p['name']):<{NAME_WIDTH}}",
             f"{p['mean_error']:>14.3f}",
@@ -91,7 +112,7 @@ def format_table(result: dict[str, Any]) -> str:
             f"{'—' if pv is None else f'{pv:.2g}':>8}",
         ]
         lines.append(" ".join(row))
-    return "\n".join(lines)
+    return lines
 
 
 def _trace_grid(res: list[EpisodeResult]) -> np.ndarray:

@@ -62,17 +62,15 @@ def run_with_policy(
 ) -> tuple[RecordingRun, dict[str, np.ndarray]]:
     """Drive the replay core with a policy; return the replayed run (``track``:
     :func:`pednav_env.replay.runner.run_prepared`'s) and the knob schedule."""
-    from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
-    from pednav_env.envs.native import lane_spaces
-
     from gymnasium import spaces
+
+    from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
 
     # the action space is the same for both filter families (four knobs)
     policy = _load_policy(policy_name, spaces.Box(-1.0, 1.0, (4,), np.float32))
     family = getattr(policy, "filter_family", None) or "paper"
     config = FootReplayConfig(decision_interval_s=interval_s, filter_family=family)
     core = FootReplayCore(config, 1, "pednav run", recordings=[rec])
-    action_space, _ = lane_spaces(core, core.config.action_dim)
     core.reset_lanes(np.array([0]), [np.random.default_rng(0)])
     obs = core.obs.copy()
     rows: dict[str, list[np.ndarray]] = {}

@@ -67,9 +67,11 @@ class FootZuptReplayEnv(ReplayFront, FootZuptEnv):
     1 s) is the alignment window (paper 003 eq 4).
 
     ## Action Space
-    ``Box(-1, 1, (4,), float32)`` (``(5,)`` with ``tune_min_stance=True``):
-    ω_max, Δf_max, process-noise scale, ZUPT-noise scale (and minimum stance),
-    exactly as in ``pednav/FootZupt-v0``.
+    ``Box(-1, 1, (4,), float32)`` (``(5,)`` with ``tune_min_stance=True``),
+    per filter family (``filter="paper"`` or ``"shoe"``) exactly as in
+    ``pednav/FootZupt-v0``: ω_max, Δf_max, process-noise scale, ZUPT-noise
+    scale (paper; action 0 as above), or γ, SHOE window, process- and
+    ZUPT-noise scales (shoe; action 0 = ``real-fixed``).
 
     ## Observation Space
     ``Box(low, high, (16 + k,), float32)``, the features of
@@ -91,7 +93,7 @@ class FootZuptReplayEnv(ReplayFront, FootZuptEnv):
     ``pednav/FootZupt-v0``.
 
     ## Arguments
-    ``gymnasium.make("pednav/FootZuptReplay-v0", data_dir=DIR,
+    ``gymnasium.make("pednav/FootZuptReplay-v0", data_dir=DIR, filter="paper",
     decision_interval_s=0.5, tune_min_stance=False, config=None,
     render_mode=None)``; ``config`` is a full
     :class:`pednav_env.envs.foot_replay_core.FootReplayConfig` (filter setup,
@@ -104,7 +106,8 @@ class FootZuptReplayEnv(ReplayFront, FootZuptEnv):
     that this env plays reset with seed s + i.
 
     ## Info
-    That of ``pednav/FootZupt-v0`` (``imu_grade`` is ``"recorded"``), plus
+    That of ``pednav/FootZupt-v0`` (``imu_grade`` is ``"recorded"``; the
+    ``context`` speed is the reference's, smoothed over 0.05 s), plus
     ``trial`` (the recording's name) and ``heading_offset`` (rad, the fixed
     rotation of the reference). ``true_stance_detections`` counts detected
     stance starts inside reference stance labels.

@@ -56,17 +56,29 @@ class FootZuptEnv(FamilyFront, NativeScalarEnv):
     duration. It is scored on horizontal position error. Action 0 is exactly
     the paper's fixed filter, so the zero policy is the paper baseline.
 
+    Filter families (``filter=``, :mod:`pednav_env.envs.foot_filters`):
+    ``"paper"`` (the default) is the filter above, eq (5) with ZUPTs at stance
+    start and end; ``"shoe"`` is the filter foot-mounted systems run: the SHOE
+    detector (Skog et al. 2010) with a ZUPT at every stance sample, action 0 =
+    ``real-fixed`` (``pednav_env/replay/real_fixed.json``), knobs log γ, the
+    statistic's window and the Q and R scales. Both run through the same
+    compiled filter; the observation is the same.
+
     Episodes are drawn from the reset seed (domain randomisation): a route of
     60–180 s with turns, stops (standing for 1–8 s) and gait changes between
     slow walking, walking, fast walking and running; stance is not perfectly
     still at speed (roll-over and micro-motion) and heel strikes shake the
     IMU; the IMU grade is paper 003's, ADIS16470-like or consumer-grade with
     random biases, scale factors and misalignments. ``scenario="paper"`` gives
-    paper 003's 5 m square with 1 m strides and its IMU.
+    paper 003's 5 m square with 1 m strides and its IMU. ``scenario="calibrated"``
+    (the shoe family's default) is the simulator calibrated on recordings: 60–120 s
+    walks at 200 Hz, every stride's speed in 0.3–3 m/s (a new speed per leg),
+    turns, stops of 1–8 s, walker stance dynamics drawn from the calibrated
+    population, the MicroStrain 3DM-GX5-25 grade with random errors.
 
     ## Action Space
     ``Box(-1, 1, (4,), float32)`` (``(5,)`` with ``tune_min_stance=True``).
-    Component i sets knob i to ``base_i · span_i ** a_i``:
+    Component i sets knob i to ``base_i · span_i ** a_i``; ``filter="paper"``:
 
     | Num | Knob | Base (paper) | Span | Range | Unit |
     |-----|------|--------------|------|-------|------|
@@ -75,6 +87,16 @@ class FootZuptEnv(FamilyFront, NativeScalarEnv):
     | 2 | process-noise scale (× paper Q) | 1 | 100 | 0.01–100 | 1 |
     | 3 | ZUPT measurement-noise scale (× paper R) | 1 | 100 | 0.01–100 | 1 |
     | 4 | minimum stance duration ``0.15 · max(a, 0)``, linear (a ≤ 0: none) | 0 | — | 0–0.15 | s |
+
+    ``filter="shoe"`` (bases: ``real-fixed``'s values):
+
+    | Num | Knob | Base (real-fixed) | Span | Range | Unit |
+    |-----|------|-------------------|------|-------|------|
+    | 0 | γ, SHOE threshold (T_k < γ) | 2.25e7 | 100 | 2.25e5–2.25e9 | 1 |
+    | 1 | SHOE window | 0.025 | 4 | 0.00625–0.1 | s |
+    | 2 | process-noise scale | 0.03 | 100 | 3e-4–3 | 1 |
+    | 3 | ZUPT measurement-noise scale | 3 | 100 | 0.03–300 | 1 |
+    | 4 | minimum stance duration, as above | 0 | — | 0–0.15 | s |
 
     Actions outside [-1, 1] are clipped and counted (``info["clipped_actions"]``);
     wrong shapes, NaN or inf raise ``ValueError``.
@@ -125,9 +147,13 @@ class FootZuptEnv(FamilyFront, NativeScalarEnv):
       diverging never pays.
 
     ## Arguments
-    ``gymnasium.make("pednav/FootZupt-v0", scenario="random", decision_interval_s=0.5,
-    rate_hz=100.0, tune_min_stance=False, config=None, render_mode=None)``;
-    ``config`` is a full :class:`pednav_env.envs.foot_core.FootZuptConfig`.
+    ``gymnasium.make("pednav/FootZupt-v0", scenario=None, filter="paper",
+    decision_interval_s=0.5, rate_hz=None, tune_min_stance=False, config=None,
+    render_mode=None)``; ``scenario`` None is ``"random"`` for the paper family
+    and ``"calibrated"`` for the shoe family, ``rate_hz`` None is 200 Hz in the
+    calibrated scenario and 100 Hz otherwise; ``config`` is a full
+    :class:`pednav_env.envs.foot_core.FootZuptConfig` (``filter`` then sets its
+    ``filter_family`` and that family's filter at action 0).
 
     ## Vectorized environment
     ``gymnasium.make_vec("pednav/FootZupt-v0", num_envs=N,
@@ -143,7 +169,12 @@ class FootZuptEnv(FamilyFront, NativeScalarEnv):
     ``stance_detections`` and their split into ``true_stance_detections`` /
     ``false_stance_detections`` (against the simulated stances), ``zupts``,
     ``zupts_rejected``, ``clipped_actions``, ``covariance_repairs``,
-    ``diverged``, ``reward_error``, ``imu_grade``, ``knobs`` (physical values).
+    ``diverged``, ``reward_error``, ``imu_grade``, ``knobs`` (physical values),
+    and ``context``: PRIVILEGED truth about the interval the next action
+    governs, never in the observation — a float64 row ``(speed_band,
+    imu_grade, speed_mps)`` (:data:`pednav_env.envs.foot_context.CONTEXT_FIELDS`;
+    codes into ``SPEED_BANDS`` and ``CONTEXT_GRADES``), in every reset and step
+    info (after an autoreset the new episode's).
 
     ## Example
     >>> import gymnasium as gym, numpy as np, pednav_env
@@ -156,7 +187,8 @@ class FootZuptEnv(FamilyFront, NativeScalarEnv):
     True
 
     ## Version History
-    - v0: initial version.
+    - v0: initial version; filter families, the calibrated scenario and
+      ``info["context"]`` added without changing the paper family's episodes.
     """
 
     env_id = ENV_ID

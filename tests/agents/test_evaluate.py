@@ -103,11 +103,12 @@ def test_evaluate_scores_against_separate_scalar_episodes():
 
     config = replace(SHORT["config"], divergence_error_m=4.0, divergence_error_fraction=0.0)
     seed, n = 5100, 4
-    out = evaluate(ENV_ID, ["paper", "adaptive"], n, seed, {"config": config})
+    # the paper filter family for the adaptive rule too (its default family is shoe)
+    out = evaluate(ENV_ID, ["paper", "adaptive:paper"], n, seed, {"config": config})
     space = gym.make(ENV_ID).action_space
     policies = {
         "paper": PaperPolicy(space),
-        "adaptive": InnovationAdaptivePolicy(space, ENV_ID),
+        "adaptive:paper": InnovationAdaptivePolicy(space, ENV_ID),
         "tuned": TunedFixedPolicy.for_env(ENV_ID, space),
     }
     errors, diverged = {}, {}
@@ -124,10 +125,10 @@ def test_evaluate_scores_against_separate_scalar_episodes():
                     break
             errors[name].append(-total)
             diverged[name].append(term)
-    flags = np.array([diverged[k] for k in ("paper", "adaptive")])
+    flags = np.array([diverged[k] for k in ("paper", "adaptive:paper")])
     assert flags.any() and not flags.all(), "the bound should split the episodes"
     by_name = {p["name"]: p for p in out["policies"]}
-    assert list(by_name) == ["paper", "adaptive"]  # tuned is played, not listed
+    assert list(by_name) == ["paper", "adaptive:paper"]  # tuned is played, not listed
     for name, p in by_name.items():
         err, div = np.array(errors[name]), np.array(diverged[name])
         # the vector env's rewards reach SB3 as float32: relative 1e-6
