@@ -42,12 +42,11 @@ from pednav_env.envs.spec import (
 from pednav_env.gait.foot import FootSimConfig, simulate_foot
 from pednav_env.gait.foot_route import (
     RouteRandomization,
-    SpeedRouteConfig,
     paper_stride_shape,
     random_route,
-    speed_route,
     square_route,
 )
+from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.nav.detectors import run_lengths
 from pednav_env.nav.zupt_config import ZuptUkfConfig

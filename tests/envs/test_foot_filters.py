@@ -6,6 +6,7 @@ the knob mapping, the per-lane SHOE statistic, the family defaults, the privileg
 from __future__ import annotations
 
 import json
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ from agents.policies import load_policy
 from pednav_env.envs.foot_context import CONTEXT_FIELDS, CONTEXT_GRADES, SPEED_BANDS
 from pednav_env.envs.foot_core import FootZuptConfig
 from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
-from pednav_env.gait.foot_route import SpeedRouteConfig
+from pednav_env.gait.speed_route import SpeedRouteConfig
 from pednav_env.io import load_recording
 from pednav_env.nav.detectors import ShoeDetectorConfig, shoe_statistic, shoe_statistic_at
 from pednav_env.replay.runner import prepare, run_prepared
