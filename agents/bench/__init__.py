@@ -35,13 +35,16 @@ def run(name: str, **kwargs: Any) -> dict[str, Any]:
 
 def format_table(result: dict[str, Any]) -> str:
     """The bench result as a text table."""
+    families = any("filter" in r for r in result["rows"])  # the foot bench's filter families
     lines = [
         f"bench {result['bench']} (peak RSS {result.get('peak_rss_mb', float('nan')):.0f} MB)",
-        f"{'num_envs':>8} {'steps/s':>12} {'filterpy steps/s':>17} {'ratio':>8}",
+        ("filter " if families else "")
+        + f"{'num_envs':>8} {'steps/s':>12} {'filterpy steps/s':>17} {'ratio':>8}",
     ]
     for r in result["rows"]:
         lines.append(
-            f"{r['num_envs']:>8} {r['steps_per_s']:>12.0f} "
+            (f"{r.get('filter', ''):<6} " if families else "")
+            + f"{r['num_envs']:>8} {r['steps_per_s']:>12.0f} "
             f"{r['reference_steps_per_s']:>17.1f} {r['ratio']:>8.1f}"
         )
     return "\n".join(lines)

@@ -18,7 +18,8 @@ from numpy.typing import NDArray
 
 from pednav_env.envs.foot_core import FootZuptConfig, generate_episode
 from pednav_env.nav.alignment import align_static
-from pednav_env.nav.zupt_config import ZuptUkfConfig
+from pednav_env.nav.detectors import ShoeDetectorConfig, shoe_statistic
+from pednav_env.nav.zupt_config import UpdateMode, ZuptUkfConfig
 from pednav_env.nav.zupt_model import (
     STATE_DIM,
     measure,
@@ -65,7 +66,8 @@ def zupt_noise(config: ZuptUkfConfig) -> NDArray[np.float64]:
 class FilterpyFootReference:
     """One scalar foot environment whose filter is a plain filterpy UKF.
 
-    Same episode as lane ``seed`` of the native env; paper policy. Between
+    Same episode as lane ``seed`` of the native env; action 0 of its filter
+    family (eq 5 at stance boundaries, or SHOE at every stance sample). Between
     corrections the mean state is integrated sample by sample for the
     detector (paper 003: the model solution gives f'_x3); at a stance
     boundary filterpy predicts (its sigma points through the strapdown over
@@ -86,8 +88,15 @@ class FilterpyFootReference:
         engine = ZuptUkf(fc, self.rate, 1)  # only for its initial-state helper
         x0, P0 = engine.initial_state(align_static(self.f[None, : self.n_align], fc.g))
         self.ukf.x, self.ukf.P = x0[0].copy(), P0[0].copy()
-        self.R = zupt_noise(fc)
+        self.R = zupt_noise(fc) * fc.zupt_noise_scale
+        self.q_scale = np.full(1, fc.process_noise_scale)
         self.detector = OnlineStanceDetector(fc.detector, self.rate, 1)
+        #: SHOE detector: its statistic over the record (the env's per-interval one
+        #: agrees to rounding), a ZUPT at every stance sample
+        self.shoe = None
+        if isinstance(fc.detector, ShoeDetectorConfig):
+            self.shoe = shoe_statistic(self.omega[None], self.f[None], fc.detector, self.rate)[0]
+        self.every_sample = fc.update_mode is UpdateMode.EVERY_STANCE_SAMPLE
         self.mean = self.ukf.x.copy()
         self.cursor = self.last = self.n_align
 
@@ -104,18 +113,22 @@ class FilterpyFootReference:
                 self.__init__(self.config, int(m))  # new episode, like an autoreset
                 return
             w = self.omega[m] - self.bias
-            q, _, _ = state_to_nav(self.mean)
-            f_n3 = quat_rotate(q, self.f[m])[2]
-            cond = self.detector.condition_threshold(
-                np.array([np.linalg.norm(w)]),
-                np.array([f_n3]),
-                np.array([fc.detector.omega_max]),
-                np.array([fc.detector.delta_f_max]),
-            )
+            if self.shoe is None:
+                q, _, _ = state_to_nav(self.mean)
+                f_n3 = quat_rotate(q, self.f[m])[2]
+                cond = self.detector.condition_threshold(
+                    np.array([np.linalg.norm(w)]),
+                    np.array([f_n3]),
+                    np.array([fc.detector.omega_max]),
+                    np.array([fc.detector.delta_f_max]),
+                )
+            else:
+                cond = np.array([self.shoe[m] <= fc.detector.threshold])
             start, end = self.detector.advance(cond, fc.detector.min_stance_s)
-            if start[0] or end[0]:
+            stance_now = bool(self.detector.in_stance[0])
+            if start[0] or end[0] or (self.every_sample and stance_now):
                 tau = np.array([(m - self.last) / self.rate])
-                self.ukf.Q = process_noise(fc.assumed_imu, self.rate, tau, np.ones(1))[0]
+                self.ukf.Q = process_noise(fc.assumed_imu, self.rate, tau, self.q_scale)[0]
                 self.ukf.predict(dt=tau[0], a=self.last, b=m)
                 self.ukf.update(np.zeros(4), R=self.R)
                 self.mean = self.ukf.x.copy()

@@ -319,8 +319,9 @@ def test_bench_command_json_and_errors(capsys):
     assert main(["bench", "foot", "--sizes", "1", "--seconds", "0.05", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert set(out) == {"bench", "rows", "peak_rss_mb"} and out["bench"] == "foot"
-    (row,) = out["rows"]
-    assert set(row) == {"num_envs", "steps_per_s", "reference_steps_per_s", "ratio"}
-    assert row["num_envs"] == 1 and row["ratio"] > 1
+    assert [row["filter"] for row in out["rows"]] == ["paper", "shoe"]  # both families
+    for row in out["rows"]:
+        assert set(row) == {"filter", "num_envs", "steps_per_s", "reference_steps_per_s", "ratio"}
+        assert row["num_envs"] == 1 and row["ratio"] > 1
     assert main(["bench", "legs"]) == 2
     assert "does not exist" in capsys.readouterr().err
