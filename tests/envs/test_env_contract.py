@@ -179,7 +179,7 @@ def test_vector_lanes_equal_scalar_envs_bit_for_bit(env_id):
                 resets.append(reset_info)
         np.testing.assert_array_equal(np.array(got_obs), np.array(lanes[i]["obs"]))
         for got, lane_reset in zip(resets, lanes[i]["resets"], strict=True):
-            assert {key: got[key] for key in lane_reset} == lane_reset
+            assert data_equivalence({key: got[key] for key in lane_reset}, lane_reset, exact=True)
     venv.close()
 
 
@@ -215,7 +215,8 @@ def test_bad_common_settings_are_refused_naming_them(env_id):
     is a ValueError naming it."""
     bad = {"scenario": "moon", "decision_interval_s": 0.0, "rate_hz": -10.0}
     takes = set(bad) & set(make(env_id).unwrapped.arguments)
-    assert takes == ({"decision_interval_s"} if env_id == "pednav/FootZuptReplay-v0" else set(bad))
+    replay = env_id.partition(":")[0] == "pednav/FootZuptReplay-v0"
+    assert takes == ({"decision_interval_s"} if replay else set(bad))
     for name in sorted(takes):
         with pytest.raises(ValueError, match=name):
             make(env_id, **{name: bad[name]})
