@@ -7,8 +7,9 @@ seeds) in one vector env, action 0 throughout. Every decision interval is filed
 under the speed band of its privileged context (``info["context"]``, the truth
 walking speed over the interval). Per band: the share of the intervals, the
 horizontal error growth over the band's intervals per metre walked in them
-(%; intervals after a divergence excluded), and the divergences that happened
-in an interval of that band (share of all episodes). Command:
+(%; not for standing), and the divergences that happened in an interval of
+that band (share of all episodes). The shares are those of the first policy's
+intervals (until each episode's end or divergence). Command:
 
     PYTHONPATH=. .venv/bin/python benchmarks/foot_speed_bands.py --episodes 200 --seed 20000
 """
@@ -114,7 +115,8 @@ def main() -> None:
         entry = {"band": list(band), "share": float(share[b])}
         for name, r in results.items():
             d = r["distance_m"][b]
-            growth = 100 * r["growth_m"][b] / d if d > 1.0 else float("nan")
+            # standing: the foot hardly moves, a growth per metre means nothing
+            growth = 100 * r["growth_m"][b] / d if b > 0 and d > 1.0 else float("nan")
             div = r["diverged"][b] / args.episodes
             row += f" {growth:>20.1f} {100 * div:>15.1f}%"
             entry[name] = {"growth_pct": growth, "diverged_share": float(div)}
