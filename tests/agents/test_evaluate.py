@@ -325,3 +325,29 @@ def test_bench_command_json_and_errors(capsys):
         assert row["num_envs"] == 1 and row["ratio"] > 1
     assert main(["bench", "legs"]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_each_policy_plays_on_its_filter_family_against_its_action_zero():
+    """Per-family evaluation: `tuned` and `adaptive` (shoe by default) are paired with
+    `real-fixed` on the shoe family, `paper` with itself on the paper family; the
+    pairs are checked against episodes played separately with each policy."""
+    from baselines import RealFixedPolicy, TunedFixedPolicy
+
+    route = RouteRandomization(duration_s=(10.0, 15.0))
+    out = evaluate(ENV_ID, ["paper", "tuned"], 3, 5200, {"config": FootZuptConfig(route=route)})
+    by_name = {p["name"]: p for p in out["policies"]}
+    assert by_name["paper"]["filter"] == "paper" and by_name["tuned"]["filter"] == "shoe"
+    space = gym.make(ENV_ID).action_space
+    shoe = {"config": FootZuptConfig(filter_family="shoe", scenario="random", route=route)}
+    zero = run_episodes(ENV_ID, RealFixedPolicy(space), 3, 5200, shoe)
+    tuned = run_episodes(ENV_ID, TunedFixedPolicy.for_env(ENV_ID, space, "shoe"), 3, 5200, shoe)
+    diff = np.array([t.mean_error - z.mean_error for t, z in zip(tuned, zero, strict=True)])
+    # float32 rewards through SB3's evaluation loop: relative 1e-6
+    assert by_name["tuned"]["vs_paper"]["mean_diff"] == pytest.approx(diff.mean(), rel=1e-5)
+    assert by_name["tuned"]["vs_tuned"]["mean_diff"] == 0.0
+    paper = run_episodes(
+        ENV_ID, PaperPolicy(space), 3, 5200, {"config": FootZuptConfig(route=route)}
+    )
+    np.testing.assert_allclose(
+        by_name["paper"]["episode_errors"], [r.mean_error for r in paper], rtol=1e-6
+    )
