@@ -65,14 +65,15 @@ def format_table(result: dict[str, Any]) -> str:
         (f"{'p paired':>8}", None),
     ]
     head = " ".join(c for c, kind in cols if show_pct or kind != "pct")
+    families = list(dict.fromkeys(p["filter"] for p in result["policies"] if "filter" in p))
+    pairing = "each filter family's action 0" if families else "paper"
     lines = [
         f"{env_id}: {result['episodes']} episodes, seeds {result['seed']}…"
         f"{result['seed'] + result['episodes'] - 1}; error (m) = time-averaged "
-        f"{error_name(env_id)}; Δ and p: paired with paper by seed (t-test)",
+        f"{error_name(env_id)}; Δ and p: paired with {pairing} by seed (t-test)",
         head,
         "-" * len(head),
     ]
-    families = list(dict.fromkeys(p["filter"] for p in result["policies"] if "filter" in p))
     blocks = (
         [(None, result["policies"])]
         if not families
