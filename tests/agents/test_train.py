@@ -49,6 +49,8 @@ def test_training_saves_a_loadable_model_with_stats_and_meta(run_dir):
     assert meta["env_id"] == ENV_ID and meta["algo"] == "ppo" and meta["timesteps"] >= 512
     assert meta["training_seeds_from"] == training_seed(3) >= TRAIN_SEED_BASE
     assert meta["lane_seeds"] == [[training_seed(3), training_seed(3) + 3]]
+    # the learned tuners' default filter family, carried by the run
+    assert meta["filter"] == "shoe" and load_run(run_dir).filter_family == "shoe"
 
 
 def test_loaded_policy_acts_like_the_trained_one(run_dir):
