@@ -180,7 +180,10 @@ def load_policy(
         path = pretrained_dir(env_id, learned)
         if not (path / "model.zip").exists():
             what = env_id if learned is None else f"{env_id} (filter family {learned})"
-            raise ValueError(f"no pretrained tuner shipped for {what} (looked in {path})")
+            hint = ""
+            if learned not in (None, "paper") and (pretrained_dir(env_id) / "model.zip").exists():
+                hint = "; the shipped one is the paper family's: pretrained:paper or --filter paper"
+            raise ValueError(f"no pretrained tuner shipped for {what} (looked in {path}){hint}")
         return load_run(path)
     path = Path(name)
     if path.suffix == ".json":
