@@ -164,11 +164,14 @@ def _cmd_tune(args: argparse.Namespace) -> int:
     from agents.evaluate import check_env_kwargs
     from agents.policies import FAMILY_ENVS
     from agents.progress import progress_bar, wanted
+    from baselines import oracle
     from baselines.tuned import RESULT_NAME, RESULTS_FILE, result_key, save_result, search
     from pednav_env.envs.foot_filters import LEARNED_FAMILY
 
     env_kwargs = _env_kwargs(args)
     check_env_kwargs(args.env_id, env_kwargs)
+    if args.per_context and env_kwargs:
+        raise ValueError("--per-context sets the env's config itself: no env options with it")
     family = None
     if args.env_id in FAMILY_ENVS:
         family = env_kwargs.setdefault("filter", LEARNED_FAMILY)
@@ -176,18 +179,32 @@ def _cmd_tune(args: argparse.Namespace) -> int:
     action_dim = gym.make(args.env_id, **env_kwargs).action_space.shape[0]
     run_dir = Path(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/tune_seed{args.seed}")
     backend = _backend(args)
+    options = {
+        "episodes": args.episodes,
+        "generations": args.generations,
+        "popsize": args.popsize,
+        "seed": args.seed,
+        "map_fn": backend.map,
+        "n_tasks": backend.workers,
+        "reevaluate_episodes": args.reevaluate,
+    }
+    if args.per_context:
+        split = oracle.context_split(args.env_id)
+        total = (args.generations + 1) * len(split.labels)
+        with progress_bar("CMA-ES generations", total, wanted(False)) as advance:
+            entry = oracle.search_per_context(
+                args.env_id, action_dim, search, on_generation=advance, **options
+            )
+        written = [oracle.save_table_entry(args.env_id, entry, run_dir / oracle.RESULT_NAME)]
+        if args.install:
+            written.append(oracle.save_table_entry(args.env_id, entry, oracle.RESULTS_FILE))
+        print(json.dumps(entry, indent=2))
+        for path in written:
+            print(f"wrote {path}", file=sys.stderr)
+        return 0
     with progress_bar("CMA-ES generations", args.generations + 1, wanted(False)) as advance:
         result = search(
-            args.env_id,
-            action_dim,
-            episodes=args.episodes,
-            generations=args.generations,
-            popsize=args.popsize,
-            seed=args.seed,
-            env_kwargs=env_kwargs,
-            map_fn=backend.map,
-            n_tasks=backend.workers,
-            on_generation=advance,
+            args.env_id, action_dim, env_kwargs=env_kwargs, on_generation=advance, **options
         )
     written = [save_result(key, result, run_dir / RESULT_NAME)]
     if args.install:
@@ -201,6 +218,27 @@ def _cmd_tune(args: argparse.Namespace) -> int:
             "--install replaces the shipped `tuned` baseline",
             file=sys.stderr,
         )
+    return 0
+
+
+def _cmd_distill(args: argparse.Namespace) -> int:
+    from agents.distill import distill
+
+    base = Path(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/distill")
+    for seed in args.seeds:
+        run_dir = base / f"seed{seed}" if len(args.seeds) > 1 else base
+        distill(
+            args.env_id,
+            run_dir,
+            seed=seed,
+            lanes=args.lanes,
+            iterations=args.iterations,
+            steps_per_iteration=args.steps,
+            on_iteration=lambda i, loss: print(
+                f"iteration {i}: loss {loss:.4f}", file=sys.stderr, flush=True
+            ),
+        )
+        print(f"saved {run_dir / 'model.zip'} (+ vecnormalize.pkl, meta.json)")
     return 0
 
 
@@ -425,11 +463,45 @@ def build_parser() -> argparse.ArgumentParser:
         "--install",
         action="store_true",
         help="also replace this env's entry in the shipped baselines/tuned_actions.json, "
-        "which `--policy tuned` reads",
+        "which `--policy tuned` reads (with --per-context: baselines/oracle_actions.json, "
+        "which `--policy oracle` reads)",
+    )
+    tu.add_argument(
+        "--reevaluate",
+        type=int,
+        default=0,
+        metavar="N",
+        help="play the chosen action on N fresh training episodes and report that mean",
+    )
+    tu.add_argument(
+        "--per-context",
+        action="store_true",
+        help="one search per episode context (sensor grade, UWB condition): the privileged "
+        "oracle's table, written as RUN_DIR/oracle_actions.json",
     )
     _add_env_options(tu)
     _add_backend_options(tu, "a generation's candidates run")
     tu.set_defaults(func=_cmd_tune)
+
+    di = sub.add_parser(
+        "distill",
+        help="train a sensor-only tuner from the privileged oracle (DAgger)",
+        description="Teacher–student distillation (agents/distill.py): the student, the actor "
+        "of a PPO MlpPolicy over the observation and its episode history, regresses the "
+        "oracle's action along its own rollouts on training episodes. Writes a run directory "
+        "(model.zip, vecnormalize.pkl, meta.json) for `pednav evaluate --policy RUN_DIR`.",
+    )
+    di.add_argument("env_id", help="pednav/WaistStep-v0 or pednav/MarkerTrack-v0")
+    di.add_argument(
+        "--seeds", type=int, nargs="+", default=[0], help="training run seeds (one run each)"
+    )
+    di.add_argument("--iterations", type=_positive_int, default=6, help="DAgger iterations")
+    di.add_argument(
+        "--steps", type=_positive_int, default=400, help="decision steps per iteration and lane"
+    )
+    di.add_argument("--lanes", type=_positive_int, default=64, help="parallel episodes")
+    di.add_argument("--run-dir", default=None, help="output dir (default runs/ENV/distill[/seedS])")
+    di.set_defaults(func=_cmd_distill)
 
     be = sub.add_parser("bench", help="throughput of a native vector env vs filterpy")
     be.add_argument("env", help="foot, waist or marker")

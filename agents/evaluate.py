@@ -130,17 +130,39 @@ def check_env_kwargs(env_id: str, env_kwargs: dict[str, Any]) -> None:
             raise ValueError(f"{env_id} has no option {key!r}; its options: {', '.join(options)}")
 
 
+class ContextFeed:
+    """Hands a policy that declares ``needs_context`` the privileged context of
+    the env's current episodes (``predict(..., context=vec.context)``); no other
+    policy ever sees it."""
+
+    def __init__(self, policy: Any, vec: NativeVecEnv, env_id: str) -> None:
+        self.policy = policy
+        self.vec = vec
+        self.env_id = env_id
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        if self.vec.context is None:
+            raise ValueError(f"{self.env_id} exposes no info['context'] for a privileged policy")
+        return self.policy.predict(
+            observation, state, episode_start, deterministic, context=self.vec.context
+        )
+
+
 def play_batch(
     batch: EpisodeBatch, on_episode: Callable[[int], None] | None = None
 ) -> list[EpisodeResult]:
     """Play one batch in a native vector env with a lane per episode; results in seed
-    order. ``on_episode(1)`` is called as each episode ends."""
+    order. ``on_episode(1)`` is called as each episode ends. A policy with
+    ``needs_context = True`` also gets the episodes' ``info["context"]``."""
     n = batch.episodes
     venv = gym.make_vec(
         batch.env_id, num_envs=n, vectorization_mode="vector_entry_point", **batch.env_kwargs
     )
     vec = NativeVecEnv(venv, split="evaluation")
     vec.seed(batch.first_seed)
+    policy = batch.policy
+    if getattr(policy, "needs_context", False):
+        policy = ContextFeed(policy, vec, batch.env_id)
     lane: dict[int, EpisodeResult] = {}
     traces: dict[int, list[float]] = {i: [] for i in range(n)}
 
@@ -162,9 +184,7 @@ def play_batch(
             if on_episode is not None:
                 on_episode(1)
 
-    evaluate_policy(
-        batch.policy, vec, n_eval_episodes=n, deterministic=True, warn=False, callback=record
-    )
+    evaluate_policy(policy, vec, n_eval_episodes=n, deterministic=True, warn=False, callback=record)
     vec.close()
     return [lane[i] for i in range(n)]
 

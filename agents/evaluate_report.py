@@ -3,8 +3,9 @@
 - :func:`format_table`: mean error with its 95 % CI, final error as % of the
   distance walked (not for MarkerTrack, whose error is a marker-tracking error
   that does not grow with distance), the share of diverged episodes in %, and
-  the paired difference against the paper policy. Long policy paths are
-  shortened (the JSON keeps them whole).
+  the paired difference against the paper policy and, when it was played, the
+  tuned constant. Long policy paths are shortened (the JSON keeps them whole);
+  the privileged oracle is labelled ``oracle (privileged)``.
 - :func:`write_plots`: ``error_over_time.png`` (median and quartiles over the
   episodes still running, against time in seconds, with the number of running
   episodes below) and ``per_episode.png`` (each episode's error against the
@@ -21,6 +22,7 @@ import numpy as np
 
 from agents.evaluate import EpisodeResult
 from agents.policies import ZERO_ACTION
+from baselines.oracle import LABEL as ORACLE_LABEL
 
 #: Envs whose error does not accumulate with the distance walked: no "% of distance".
 NO_DISTANCE_PERCENT = frozenset({"pednav/MarkerTrack-v0"})
@@ -37,7 +39,10 @@ def error_name(env_id: str) -> str:
 
 
 def short_name(name: str, width: int = NAME_WIDTH) -> str:
-    """``name`` if it fits in ``width`` characters, else its last path parts after "…"."""
+    """``name`` if it fits in ``width`` characters, else its last path parts after "…";
+    the oracle as ``oracle (privileged)``."""
+    if name == "oracle":
+        return ORACLE_LABEL
     if len(name) <= width:
         return name
     parts = Path(name).parts
@@ -64,13 +69,17 @@ def format_table(result: dict[str, Any]) -> str:
         (f"{'Δ vs paper':>10}", None),
         (f"{'p paired':>8}", None),
     ]
+    with_tuned = any(p.get("vs_tuned") for p in result["policies"])
+    if with_tuned:
+        cols += [(f"{'Δ vs tuned':>10}", None), (f"{'p paired':>8}", None)]
     head = " ".join(c for c, kind in cols if show_pct or kind != "pct")
     families = list(dict.fromkeys(p["filter"] for p in result["policies"] if "filter" in p))
     pairing = "each filter family's action 0" if families else "paper"
     lines = [
         f"{env_id}: {result['episodes']} episodes, seeds {result['seed']}…"
         f"{result['seed'] + result['episodes'] - 1}; error (m) = time-averaged "
-        f"{error_name(env_id)}; Δ and p: paired with {pairing} by seed (t-test)",
+        f"{error_name(env_id)}; Δ and p: paired with {pairing}"
+        f"{' (and tuned)' if with_tuned else ''} by seed (t-test)",
         head,
         "-" * len(head),
     ]
@@ -83,11 +92,11 @@ def format_table(result: dict[str, Any]) -> str:
         if family is not None:
             zero = ZERO_ACTION[family]
             lines.append(f"filter family {family} (action 0 = {zero}; Δ and p: paired with {zero})")
-        lines.extend(_rows(entries, show_pct))
+        lines.extend(_rows(entries, show_pct, with_tuned))
     return "\n".join(lines)
 
 
-def _rows(entries: list[dict[str, Any]], show_pct: bool) -> list[str]:
+def _rows(entries: list[dict[str, Any]], show_pct: bool, with_tuned: bool) -> list[str]:
     lines = []
     for p in entries:
         lo, hi = p["ci95"]
@@ -112,6 +121,11 @@ def _rows(entries: list[dict[str, Any]], show_pct: bool) -> list[str]:
             f"{diff:>10}",
             f"{'—' if pv is None else f'{pv:.2g}':>8}",
         ]
+        if with_tuned:
+            vt = p.get("vs_tuned") or {}
+            tdiff = "—" if p["name"] == "tuned" or not vt else f"{vt['mean_diff']:+.3f}"
+            tp = vt.get("p_value")
+            row += [f"{tdiff:>10}", f"{'—' if tp is None else f'{tp:.2g}':>8}"]
         lines.append(" ".join(row))
     return lines
 

@@ -2,8 +2,10 @@
 
 Names: ``paper`` (action 0), ``tuned`` (the shipped best constant action),
 ``adaptive`` (the innovation-based rule), ``pretrained`` (the shipped tuner
-under ``agents/pretrained/``), and for the foot envs ``real-fixed`` (action 0
-of the shoe filter family).
+under ``agents/pretrained/``), ``oracle`` (WaistStep, MarkerTrack; privileged: the
+constant tuned for the episode's true context, :mod:`baselines.oracle`; a target,
+not a baseline), and for the foot envs ``real-fixed`` (action 0 of the shoe filter
+family).
 
 Filter families (foot envs, :mod:`pednav_env.envs.foot_filters`): every policy
 carries the family it is made for as ``filter_family`` (None on the other
@@ -14,7 +16,7 @@ by default :data:`~pednav_env.envs.foot_filters.LEARNED_FAMILY` (shoe); a
 training run carries its family in ``meta.json`` (``"filter"``, paper for
 runs that have none) and a tuned-actions file in its keys
 (:func:`baselines.tuned.result_key`). Paths: a run directory of ``pednav train``
-(``model.zip``, ``vecnormalize.pkl``, ``meta.json``), a saved SB3 model
+or ``pednav distill`` (``model.zip``, ``vecnormalize.pkl``, ``meta.json``), a saved SB3 model
 (``.zip``), a tuned-actions JSON file written by ``pednav tune``, or a tune run
 directory holding one.
 
@@ -35,14 +37,16 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
+from agents.features import FeaturePolicy
 from baselines import InnovationAdaptivePolicy, PaperPolicy, RealFixedPolicy, TunedFixedPolicy
+from baselines.oracle import OraclePolicy
 from baselines.tuned import RESULT_NAME
 from pednav_env.envs.foot_filters import FILTER_FAMILIES, LEARNED_FAMILY, require_family
 
 #: Shipped tuners: agents/pretrained/<env name>/.
 PRETRAINED_DIR = Path(__file__).parent / "pretrained"
 #: Policy names understood besides a path.
-BUILTIN_POLICIES = ("paper", "tuned", "adaptive", "pretrained")
+BUILTIN_POLICIES = ("paper", "tuned", "adaptive", "pretrained", "oracle")
 #: Observation statistics saved beside a model trained under VecNormalize.
 STATS_NAME = "vecnormalize.pkl"
 #: Envs that play another env's named policies (same spaces and knobs): the replay
@@ -87,8 +91,12 @@ class NormalizedModelPolicy:
         )
 
 
-def load_run(path: str | Path) -> NormalizedModelPolicy:
+def load_run(path: str | Path) -> Any:
     """Load a run directory, or a ``model.zip`` with ``vecnormalize.pkl`` beside it.
+
+    A run whose ``meta.json`` names ``"features"`` (e.g. ``"history"``, written by
+    :mod:`agents.distill`) gets those features computed in front of its network
+    (:class:`agents.features.FeaturePolicy`).
 
     Without ``vecnormalize.pkl`` the model sees raw observations; a
     ``UserWarning`` says so (a model trained under ``VecNormalize`` then acts on
@@ -116,12 +124,13 @@ def load_run(path: str | Path) -> NormalizedModelPolicy:
         raise ValueError(f"policy {str(path)!r}: not a PPO or SAC model")
     stats_file = model_file.parent / STATS_NAME
     family = meta.get("filter", "paper" if meta.get("env_id") in FAMILY_ENVS else None)
+    features = meta.get("features")
     if stats_file.exists():
         with stats_file.open("rb") as fh:
             vn = pickle.load(fh)
         policy = NormalizedModelPolicy(model, vn.obs_rms, vn.clip_obs, vn.epsilon)
         policy.filter_family = family
-        return policy
+        return _with_features(policy, features, model)
     normalized = (meta.get("hyperparams") or {}).get("normalize", {}).get("norm_obs")
     known = " (its meta.json says it was trained with VecNormalize)" if normalized else ""
     warnings.warn(
@@ -133,7 +142,7 @@ def load_run(path: str | Path) -> NormalizedModelPolicy:
     )
     policy = NormalizedModelPolicy(model, None, 10.0, 1e-8)
     policy.filter_family = family
-    return policy
+    return _with_features(policy, features, model)
 
 
 def pretrained_dir(env_id: str, filter_family: str | None = None) -> Path:
@@ -176,6 +185,8 @@ def load_policy(
         return TunedFixedPolicy.for_env(env_id, action_space, learned)
     if name == "adaptive":
         return InnovationAdaptivePolicy(action_space, env_id, learned)
+    if name == "oracle":
+        return OraclePolicy.for_env(env_id, action_space)
     if name == "pretrained":
         path = pretrained_dir(env_id, learned)
         if not (path / "model.zip").exists():

@@ -70,6 +70,10 @@ class NativeVecEnv(VecEnv):
         self.lane_offset = lane_offset
         super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
         self._actions: np.ndarray | None = None
+        #: The env's privileged ``info["context"]`` of each lane's current episode
+        #: (None when the env has none), updated at every reset and step; only the
+        #: evaluation hands it to policies that declare ``needs_context``.
+        self.context: np.ndarray | None = None
         #: Lane seeds of the last :meth:`seed` call (None before any).
         self.lane_seeds: list[int] | None = None
 
@@ -93,6 +97,7 @@ class NativeVecEnv(VecEnv):
             self.seed(None)
         seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
         obs, info = self.venv.reset(seed=seeds)
+        self.context = self._context(info)
         self.reset_infos = [self._lane_info(info, i) for i in range(self.num_envs)]
         self._reset_seeds()
         self._reset_options()
@@ -103,6 +108,7 @@ class NativeVecEnv(VecEnv):
 
     def step_wait(self):
         obs, reward, terminated, truncated, info = self.venv.step(self._actions)
+        self.context = self._context(info)
         dones = terminated | truncated
         infos = []
         for i in range(self.num_envs):
@@ -113,6 +119,12 @@ class NativeVecEnv(VecEnv):
                 lane["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
             infos.append(lane)
         return obs, reward.astype(np.float32), dones, infos
+
+    @staticmethod
+    def _context(info: dict[str, Any]) -> np.ndarray | None:
+        """The current episodes' context (after an autoreset: the new episode's)."""
+        value = info.get("context")
+        return None if value is None else np.array(value, dtype=np.float64)
 
     @staticmethod
     def _lane_info(info: dict[str, Any], i: int) -> dict[str, Any]:

@@ -23,6 +23,13 @@ LANES_PER_RUN = 10_000
 MAX_RUN_SEED = 10_000
 #: The tuned-fixed search evaluates candidates on these seeds (training side).
 SEARCH_SEED = 900_000_000  # tuned-fixed search episodes (training side)
+#: A search's result is re-evaluated on fresh training episodes from this seed on
+#: (never searched on), so the reported objective is not the best of many draws.
+REEVALUATION_SEED = 910_000_000
+#: The final-evaluation range: evaluation seeds kept untouched during development
+#: and played once, with the shipped policies, for the published tables
+#: (docs/RESULTS.md). Development evaluation uses 5 000 – 9 999 and 20 000 – 29 999.
+FINAL_EVALUATION_SEEDS = range(800_000, 801_000)
 
 
 def check_evaluation_seeds(seed: int, episodes: int) -> None:

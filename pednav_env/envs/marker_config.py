@@ -79,6 +79,11 @@ def _condition_spec(condition: str, rate_hz: float) -> UwbSpec:
 #: Episode UWB conditions of the random scenario (see :func:`uwb_spec`).
 UWB_CONDITIONS: tuple[str, ...] = ("clean", "noisy", "nlos", "outliers", "dropouts", "realistic")
 
+#: Entries of the privileged ``info["context"]`` (the episode's truth, never observed):
+#: the UWB condition as its index in ``MarkerTrackConfig.uwb_conditions`` (−1 in the
+#: paper scenario) and the factor on its σ.
+CONTEXT_FIELDS: tuple[str, ...] = ("uwb_condition_index", "uwb_noise_factor")
+
 
 @dataclass(frozen=True)
 class MarkerTrackConfig(EnvConfig):

@@ -50,7 +50,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from pednav_env.envs.marker_config import ACTION_KNOBS, MarkerTrackConfig
+from pednav_env.envs.marker_config import ACTION_KNOBS, CONTEXT_FIELDS, MarkerTrackConfig
 from pednav_env.envs.marker_episode import generate_episode
 from pednav_env.envs.spec import ObsFeature, obs_bounds, validate_action
 from pednav_env.gait.heel_knee_model import I_CX, I_OMEGA, PARAM_NAMES
@@ -171,6 +171,8 @@ class MarkerTrackCore:
         self.cursor = np.zeros(n, dtype=np.int64)
         self.distance = np.zeros(n)
         self.condition = np.full(n, "", dtype=object)
+        #: The privileged episode context (CONTEXT_FIELDS), per lane.
+        self.context = np.zeros((n, len(CONTEXT_FIELDS)))
         self.action = np.zeros((n, config.action_dim))
         self.clipped = np.zeros(n, dtype=np.int64)
         self.reanchors = np.zeros(n, dtype=np.int64)
@@ -216,6 +218,9 @@ class MarkerTrackCore:
             self.x_start[lane] = ep.truth[0, 0]
             self.length[lane] = t
             self.condition[lane] = ep.uwb_condition
+            conditions = self.config.uwb_conditions
+            index = conditions.index(ep.uwb_condition) if ep.uwb_condition in conditions else -1
+            self.context[lane] = (index, ep.uwb_noise_factor)
         self.engine.reset(lanes)
         self.ep_start[lanes] = self.g
         self.cursor[lanes] = 0

@@ -32,6 +32,7 @@ class Episode:
     valid: BoolArray  # (K, 2) per marker
     truth: Array  # (K, 4) true positions (m)
     uwb_condition: str
+    uwb_noise_factor: float = 1.0  #: factor on the condition's UWB σ (1)
 
 
 @functools.lru_cache(maxsize=16)
@@ -58,13 +59,17 @@ def generate_episode(
         k = round(config.paper_duration_s * rate)
         condition = "paper"
         spec = UwbSpec.paper(rate)
+        noise_factor = 1.0
     else:
         k = max(2, round(rng.uniform(*config.duration_s) * rate))
         cdf = _condition_cdf(tuple(config.uwb_condition_weights))
         pick = min(int(np.searchsorted(cdf, rng.random(), side="right")), len(cdf) - 1)
         condition = config.uwb_conditions[pick]
-        spec = uwb_spec(condition, rate, rng.uniform(*config.noise_factor_range))
+        noise_factor = float(rng.uniform(*config.noise_factor_range))
+        spec = uwb_spec(condition, rate, noise_factor)
     walk = simulate_heel_knee(gait, k, [rng])
     markers = walk.markers[0]
     uwb = measure_uwb(spec, markers[None], [rng])
-    return Episode(uwb.z[0].reshape(k, DIM_Z), uwb.valid[0], markers.reshape(k, DIM_Z), condition)
+    return Episode(
+        uwb.z[0].reshape(k, DIM_Z), uwb.valid[0], markers.reshape(k, DIM_Z), condition, noise_factor
+    )

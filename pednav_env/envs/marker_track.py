@@ -126,7 +126,11 @@ class MarkerTrackEnv(NativeScalarEnv):
     distance from the start, m), ``samples``, ``dropped_samples`` (marker
     samples lost in the interval), ``reanchors``, ``clipped_actions``,
     ``covariance_repairs``, ``diverged``, ``lock_lost``, ``reward_error``,
-    ``uwb_condition``, ``knobs`` (physical values).
+    ``uwb_condition``, ``knobs`` (physical values). ``context`` is privileged
+    truth for oracle policies only (never part of the observation): the UWB
+    condition's index in ``config.uwb_conditions`` (−1 in the paper scenario)
+    and the factor on its σ, in the order of
+    :data:`pednav_env.envs.marker_config.CONTEXT_FIELDS`.
 
     ## Example
     >>> import gymnasium as gym, numpy as np, pednav_env
@@ -150,7 +154,7 @@ class MarkerTrackEnv(NativeScalarEnv):
     track_dim = 4
 
     def lane_info(self) -> dict[str, Any]:
-        return {"uwb_condition": self.core.condition[0]}
+        return {"uwb_condition": self.core.condition[0], "context": self.core.context[0].copy()}
 
     def record_track(self, info: dict[str, Any]) -> None:
         """Marker tracks of the interval's samples, the last RENDER_WINDOW_S seconds."""
@@ -180,7 +184,7 @@ class MarkerTrackVectorEnv(NativeVectorEnv):
     scalar_env = MarkerTrackEnv
 
     def lane_info(self) -> dict[str, np.ndarray]:
-        return {"uwb_condition": self.core.condition.copy()}
+        return {"uwb_condition": self.core.condition.copy(), "context": self.core.context.copy()}
 
 
 # ACTION_KNOBS / OBS_FEATURES are re-exported for documentation tools.

@@ -70,6 +70,16 @@ OBS_FEATURES: tuple[ObsFeature, ...] = (
     ObsFeature("hip_rise_last", 0.0, 2.0, "m"),
 )
 
+#: Entries of the privileged ``info["context"]`` (the episode's truth, never observed):
+#: the sensor grade as its index in ``WaistStepConfig.sensor_grades``, the factors
+#: on the grade's σ_a and σ_n, and the belt-ringing amplitude (m/s²).
+CONTEXT_FIELDS: tuple[str, ...] = (
+    "sensor_grade_index",
+    "accel_noise_scale",
+    "bm_noise_scale",
+    "vibration_amplitude_mps2",
+)
+
 
 # --------------------------------------------------------------------------- configuration
 @dataclass(frozen=True)

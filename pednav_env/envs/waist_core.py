@@ -47,7 +47,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.envs.spec import obs_bounds, validate_action
-from pednav_env.envs.waist_config import ACTION_DIM, ACTION_KNOBS, OBS_FEATURES, WaistStepConfig
+from pednav_env.envs.waist_config import (
+    ACTION_DIM,
+    ACTION_KNOBS,
+    CONTEXT_FIELDS,
+    OBS_FEATURES,
+    WaistStepConfig,
+)
 from pednav_env.envs.waist_episode import generate_episode
 from pednav_env.nav.step_fusion_kf import StepFusionKF
 from pednav_env.nav.step_velocity import pendulum_step_velocity, prefix_integrals
@@ -93,6 +99,8 @@ class WaistStepCore:
         self.leg = np.ones(n)
         self.leg_true = np.ones(n)
         self.grade = ["" for _ in range(n)]
+        #: The privileged episode context (CONTEXT_FIELDS), per lane.
+        self.context = np.zeros((n, len(CONTEXT_FIELDS)))
         # Detector, filter-side state and knobs.
         self.det_armed = np.zeros(n, dtype=bool)
         self.det_since = np.full(n, np.inf)
@@ -147,6 +155,13 @@ class WaistStepCore:
             self.leg[lane] = ep.leg_length_assumed
             self.leg_true[lane] = ep.leg_length
             self.grade[lane] = ep.sensor_grade
+            grades = c.sensor_grades
+            self.context[lane] = (
+                grades.index(ep.sensor_grade) if ep.sensor_grade in grades else -1,
+                ep.accel_noise_scale,
+                ep.bm_noise_scale,
+                ep.vibration_amplitude_mps2,
+            )
         kf, fc = self.kf, c.filter
         kf.x[lanes] = np.asarray(fc.initial_estimate)
         kf.P[lanes] = fc.P0

@@ -26,6 +26,9 @@ class Episode(WaistRecord):
     leg_length: float  #: true l (m)
     leg_length_assumed: float  #: the filter's l (m)
     sensor_grade: str
+    accel_noise_scale: float = 1.0  #: factor on the grade's σ_a (1)
+    bm_noise_scale: float = 1.0  #: factor on the grade's σ_n (1)
+    vibration_amplitude_mps2: float = 0.0  #: belt ringing amplitude A (m/s²)
 
 
 def generate_episode(config: WaistStepConfig, rng: np.random.Generator) -> Episode:
@@ -38,6 +41,7 @@ def generate_episode(config: WaistStepConfig, rng: np.random.Generator) -> Episo
         grade = WAIST_GRADES[grade_name]
         vibration = BeltVibration()
         ins_bias = 0.0
+        accel_scale = bm_scale = 1.0
     else:
         r = config.randomization
         duration = rng.uniform(*r.duration_s)
@@ -48,8 +52,10 @@ def generate_episode(config: WaistStepConfig, rng: np.random.Generator) -> Episo
         grade_name = config.sensor_grades[int(rng.choice(len(w), p=w / w.sum()))]
         base = WAIST_GRADES[grade_name]
         lo, hi = np.log(r.grade_scale)
-        sigma_a = base.ins_accel_noise_std * math.exp(rng.uniform(lo, hi))
-        sigma_n = base.bm_noise_std * math.exp(rng.uniform(lo, hi))
+        accel_scale = math.exp(rng.uniform(lo, hi))
+        bm_scale = math.exp(rng.uniform(lo, hi))
+        sigma_a = base.ins_accel_noise_std * accel_scale
+        sigma_n = base.bm_noise_std * bm_scale
         grade = replace(base, ins_accel_noise_std=sigma_a, bm_noise_std=sigma_n)
         err = float(np.clip(rng.standard_normal() * r.leg_length_error, -0.06, 0.06))
         leg_assumed = leg * (1.0 + err)
@@ -67,4 +73,7 @@ def generate_episode(config: WaistStepConfig, rng: np.random.Generator) -> Episo
         leg_length=float(leg),
         leg_length_assumed=float(leg_assumed),
         sensor_grade=grade_name,
+        accel_noise_scale=accel_scale,
+        bm_noise_scale=bm_scale,
+        vibration_amplitude_mps2=vibration.amplitude_mps2,
     )

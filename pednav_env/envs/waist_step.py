@@ -132,6 +132,12 @@ class WaistStepEnv(NativeScalarEnv):
     simulated footfall, start or stop), ``filter_updates``,
     ``clipped_actions``, ``covariance_repairs``, ``diverged``,
     ``reward_error``, ``sensor_grade``, ``knobs`` (physical values).
+    ``context`` is privileged truth for oracle policies only (never part of
+    the observation): the episode's sensor-grade index in
+    ``config.sensor_grades`` (−1 for the paper scenario's ``paper004`` when it
+    is not listed), the factors on σ_a and σ_n, and the belt-ringing amplitude
+    (m/s²), in the order of
+    :data:`pednav_env.envs.waist_config.CONTEXT_FIELDS`.
 
     ## Example
     >>> import gymnasium as gym, numpy as np, pednav_env
@@ -157,7 +163,7 @@ class WaistStepEnv(NativeScalarEnv):
         return ACTION_DIM
 
     def lane_info(self) -> dict[str, Any]:
-        return {"sensor_grade": self.core.grade[0]}
+        return {"sensor_grade": self.core.grade[0], "context": self.core.context[0].copy()}
 
 
 class WaistStepVectorEnv(NativeVectorEnv):
@@ -167,7 +173,10 @@ class WaistStepVectorEnv(NativeVectorEnv):
     scalar_env = WaistStepEnv
 
     def lane_info(self) -> dict[str, np.ndarray]:
-        return {"sensor_grade": np.array(self.core.grade, dtype=object)}
+        return {
+            "sensor_grade": np.array(self.core.grade, dtype=object),
+            "context": self.core.context.copy(),
+        }
 
 
 # Re-exported for documentation tools.
