@@ -1,12 +1,12 @@
 """Teacher–student distillation (DAgger) of the privileged oracle into a sensor-only tuner.
 
 The teacher is :class:`baselines.oracle.OraclePolicy`: the constant tuned for
-the episode's true context. The student sees only the observation, with the
-episode-history features of :mod:`agents.features` (running mean and RMS of
-each entry), from which it must recognise the context. It is the actor of an
-SB3 PPO ``MlpPolicy``, fitted by regression of its mean action on the
-teacher's action (mean squared error), along the student's own rollouts
-(DAgger, Ross, Gordon & Bagnell 2011):
+the episode's true context. The student sees only the observation (without
+the action in force), with the episode-history features of
+:mod:`agents.features` (running mean and RMS of each entry), from which it must
+recognise the context. It is the actor of an SB3 PPO ``MlpPolicy``, fitted
+by regression of its mean action on the teacher's action (mean squared
+error), along the student's own rollouts (DAgger, Ross, Gordon & Bagnell 2011):
 
 1. iteration 0 plays the teacher on every lane; iteration i plays, at each
    decision step and lane, the teacher with probability ``beta ** i`` and the
@@ -149,8 +149,9 @@ def distill(
     if teacher is None:
         teacher = OraclePolicy.for_env(env_id, space)
     obs_dim = int(vec.observation_space.shape[0])
-    model, norm = _student(feature_dim(obs_dim, HISTORY), space, seed, list(net_arch))
-    history = HistoryFeatures()
+    action_dim = int(space.shape[0])
+    model, norm = _student(feature_dim(obs_dim, HISTORY, action_dim), space, seed, list(net_arch))
+    history = HistoryFeatures(action_dim)
     xs: list[np.ndarray] = []
     ys: list[np.ndarray] = []
     obs = vec.reset()

@@ -145,6 +145,15 @@ def load_run(path: str | Path) -> Any:
     return _with_features(policy, features, model)
 
 
+def _with_features(policy: NormalizedModelPolicy, features: str | None, model: Any) -> Any:
+    """``policy``, behind the run's feature computation when its meta.json names one."""
+    if not features:
+        return policy
+    wrapped = FeaturePolicy(policy, features, int(np.prod(model.action_space.shape)))
+    wrapped.filter_family = policy.filter_family
+    return wrapped
+
+
 def pretrained_dir(env_id: str, filter_family: str | None = None) -> Path:
     """Directory of the shipped tuner for ``env_id`` (e.g. pednav/FootZupt-v0;
     ``FootZupt-v0-shoe`` for a filter family other than the paper's)."""

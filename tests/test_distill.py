@@ -19,16 +19,17 @@ SHORT = {"config": MarkerTrackConfig(duration_s=(3.0, 4.0))}
 
 def test_history_features_restart_at_each_episode_start():
     rng = np.random.default_rng(0)
-    obs = rng.normal(size=(7, 2, 3))  # steps × lanes × entries
+    obs = rng.normal(size=(7, 2, 5))  # steps × lanes × (3 entries + 2 action entries)
     starts = np.zeros((7, 2), dtype=bool)
     starts[0] = True
     starts[4, 1] = True  # lane 1 starts a new episode at step 4
-    feats = HistoryFeatures()
+    feats = HistoryFeatures(action_dim=2)
     out = [feats(obs[t], starts[t]) for t in range(7)]
     last = out[-1]
     for lane, first in ((0, 0), (1, 4)):
-        seen = obs[first:, lane]
-        np.testing.assert_allclose(last[lane, :3], obs[-1, lane], rtol=1e-6)
+        seen = obs[first:, lane, :3]  # the action in force is left out
+        assert last.shape == (2, 9)
+        np.testing.assert_allclose(last[lane, :3], obs[-1, lane, :3], rtol=1e-6)
         np.testing.assert_allclose(last[lane, 3:6], seen.mean(axis=0), rtol=1e-5, atol=1e-6)
         rms = np.sqrt((seen**2).mean(axis=0))
         np.testing.assert_allclose(last[lane, 6:], rms, rtol=1e-5)  # float32 output
