@@ -16,13 +16,14 @@ $(VENV)/.installed: pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev]'
 	touch $@
 
-# Main job: train a PPO tuner on FootZupt-v0 (about 3 min on 2 cores), then compare it
-# with the paper, tuned-fixed and innovation-adaptive policies on 100 held-out episodes.
-DEMO_STEPS ?= 400000
+# Main job: distil the privileged oracle of MarkerTrack-v0 (the constant tuned per UWB
+# condition) into a sensor-only tuner by DAgger (agents/distill.py), then compare it with
+# the paper filter, the CMA-ES constant and the oracle on 200 development episodes.
+DEMO_ENV ?= pednav/MarkerTrack-v0
 demo: setup
-	$(VENV)/bin/pednav train pednav/FootZupt-v0 --algo ppo --timesteps $(DEMO_STEPS) --run-dir runs/demo
-	$(VENV)/bin/pednav evaluate pednav/FootZupt-v0 --policy paper tuned adaptive runs/demo \
-		--episodes 100 --seed 5000
+	$(VENV)/bin/pednav distill $(DEMO_ENV) --run-dir runs/demo
+	$(VENV)/bin/pednav evaluate $(DEMO_ENV) --policy paper tuned oracle runs/demo \
+		--episodes 200 --seed 5000
 
 test: setup
 	$(VENV)/bin/ruff check .

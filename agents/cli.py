@@ -165,7 +165,14 @@ def _cmd_tune(args: argparse.Namespace) -> int:
     from agents.policies import FAMILY_ENVS
     from agents.progress import progress_bar, wanted
     from baselines import oracle
-    from baselines.tuned import RESULT_NAME, RESULTS_FILE, result_key, save_result, search
+    from baselines.tuned import (
+        RESULT_NAME,
+        RESULTS_FILE,
+        read_results,
+        result_key,
+        save_result,
+        search,
+    )
     from pednav_env.envs.foot_filters import LEARNED_FAMILY
 
     env_kwargs = _env_kwargs(args)
@@ -190,6 +197,10 @@ def _cmd_tune(args: argparse.Namespace) -> int:
     }
     if args.per_context:
         split = oracle.context_split(args.env_id)
+        shipped = read_results(RESULTS_FILE) if RESULTS_FILE.exists() else {}
+        if args.env_id in shipped:  # refine the shipped CMA-ES constant per context
+            options["x0"] = shipped[args.env_id]["action"]
+            options["sigma0"] = args.sigma0
         total = (args.generations + 1) * len(split.labels)
         with progress_bar("CMA-ES generations", total, wanted(False)) as advance:
             entry = oracle.search_per_context(
@@ -476,8 +487,15 @@ def build_parser() -> argparse.ArgumentParser:
     tu.add_argument(
         "--per-context",
         action="store_true",
-        help="one search per episode context (sensor grade, UWB condition): the privileged "
-        "oracle's table, written as RUN_DIR/oracle_actions.json",
+        help="one search per episode context (sensor grade, UWB condition), each started "
+        "from the shipped CMA-ES constant: the privileged oracle's table, written as "
+        "RUN_DIR/oracle_actions.json",
+    )
+    tu.add_argument(
+        "--sigma0",
+        type=_positive_float,
+        default=0.25,
+        help="--per-context: CMA-ES initial step size around the shipped constant",
     )
     _add_env_options(tu)
     _add_backend_options(tu, "a generation's candidates run")

@@ -159,6 +159,7 @@ def search(
     n_tasks: int = 1,
     on_generation: Callable[[int], None] | None = None,
     reevaluate_episodes: int = 0,
+    x0: Sequence[float] | None = None,
 ) -> dict[str, Any]:
     """CMA-ES over constant actions; returns the result (``save_result`` writes it).
 
@@ -170,7 +171,8 @@ def search(
     of many noisy draws, so biased low. With ``reevaluate_episodes`` > 0 the
     chosen action and the paper action are also played on that many fresh
     training episodes (seeds from :data:`REEVALUATION_SEED`), reported as
-    ``reevaluation`` (the honest figure).
+    ``reevaluation`` (the honest figure). ``x0``: the initial mean (default
+    action 0, the paper's filter).
     """
     import cma
 
@@ -181,8 +183,11 @@ def search(
     if reevaluate_episodes < 0:
         raise ValueError(f"reevaluate_episodes must be ≥ 0, got {reevaluate_episodes}")
     ep_seeds = [SEARCH_SEED + i for i in range(episodes)]
+    start_mean = np.zeros(action_dim) if x0 is None else np.asarray(x0, dtype=float)
+    if start_mean.shape != (action_dim,) or np.any(np.abs(start_mean) > 1):
+        raise ValueError(f"x0 must be {action_dim} values in [-1, 1], got {x0!r}")
     es = cma.CMAEvolutionStrategy(
-        np.zeros(action_dim),
+        start_mean,
         sigma0,
         {"bounds": [-1.0, 1.0], "popsize": popsize, "seed": seed, "verbose": -9},
     )
@@ -222,6 +227,8 @@ def search(
         "episode_seeds": [ep_seeds[0], ep_seeds[-1]],
         "generations": generations,
         "popsize": popsize,
+        "initial_mean": start_mean.tolist(),
+        "sigma0": sigma0,
         "best_per_generation_m": history,
         "seconds": round(time.perf_counter() - start, 1),
         "env_kwargs": {k: repr(v) for k, v in (env_kwargs or {}).items()},

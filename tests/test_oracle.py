@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import json
+
 import gymnasium as gym
 import numpy as np
 import pytest
 
 import pednav_env  # noqa: F401  (registers the environments)
+from agents.cli import main
 from agents.evaluate import EpisodeBatch, evaluate, play_batch
 from agents.evaluate_report import format_table
 from baselines import oracle as oracle_module
@@ -14,6 +17,7 @@ from baselines.oracle import CONTEXTS, RESULTS_FILE, OraclePolicy, read_table
 from baselines.tuned import TunedFixedPolicy
 from pednav_env.envs.marker_config import MarkerTrackConfig
 from pednav_env.envs.waist_config import WaistRandomization, WaistStepConfig
+from pednav_env.seeds import REEVALUATION_SEED
 
 SHORT = {
     "pednav/WaistStep-v0": {
@@ -144,3 +148,48 @@ def test_evaluate_labels_and_plays_the_oracle(monkeypatch):
     result = evaluate(env_id, ["oracle"], 3, 20000, SHORT[env_id])
     assert result["policies"][0]["name"] == "oracle"
     assert "oracle (privileged)" in format_table(result)
+
+
+def _scalar_mean_error(env_id, action, seeds, env_kwargs):
+    """Independent path: the scalar env, one episode per seed, a constant action."""
+    env = gym.make(env_id, **env_kwargs)
+    errors, labels = [], []
+    for seed in seeds:
+        _, info = env.reset(seed=seed)
+        labels.append(info[LABEL_KEY[env_id]])
+        total, done = 0.0, False
+        while not done:
+            _, r, term, trunc, _ = env.step(np.asarray(action, np.float32))
+            total += r
+            done = term or trunc
+        errors.append(-total)
+    return float(np.mean(errors)), labels
+
+
+def test_tune_per_context_searches_each_context_on_its_own_episodes(tmp_path, monkeypatch, capsys):
+    """`pednav tune --per-context` writes one search per UWB condition; each was
+    re-evaluated on fresh training episodes of that condition only (the scalar env
+    replays them), and --install makes the table `--policy oracle` reads."""
+    env_id = "pednav/MarkerTrack-v0"
+    installed = tmp_path / "installed.json"
+    monkeypatch.setattr(oracle_module, "RESULTS_FILE", installed)
+    args = ["tune", env_id, "--per-context", "--episodes", "2", "--generations", "1"]
+    args += ["--popsize", "2", "--reevaluate", "1", "--run-dir", str(tmp_path / "run"), "--install"]
+    assert main(args) == 0
+    printed = json.loads(capsys.readouterr().out)
+    entry = read_table(tmp_path / "run" / "oracle_actions.json")[env_id]
+    assert entry == printed and read_table(installed)[env_id] == entry
+    split = CONTEXTS[env_id]
+    assert entry["labels"] == list(split.labels)
+    for label in split.labels[1:3]:  # two conditions keep the test short
+        result = entry["contexts"][label]
+        seeds = [REEVALUATION_SEED]
+        mean, labels = _scalar_mean_error(env_id, result["action"], seeds, split.restrict(label))
+        assert labels == [label]
+        # same episodes and action through the vector env: equal up to summation order
+        assert result["reevaluation"]["mean_m"] == pytest.approx(mean, rel=1e-9)
+    space = gym.make(env_id).action_space
+    oracle = OraclePolicy.for_env(env_id, space)
+    np.testing.assert_allclose(
+        oracle.actions[1], np.clip(entry["contexts"][split.labels[1]]["action"], -1, 1), atol=1e-6
+    )
