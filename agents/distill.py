@@ -34,6 +34,7 @@ import gymnasium as gym
 import numpy as np
 
 import pednav_env  # noqa: F401  (registers the environments)
+from agents.backends import one_torch_thread
 from agents.features import HISTORY, HistoryFeatures, feature_dim
 from baselines.oracle import OraclePolicy
 from pednav_env.sb3 import NativeVecEnv
@@ -107,7 +108,14 @@ def _fit(model: Any, x: np.ndarray, y: np.ndarray, epochs: int, batch_size: int,
     return loss_sum
 
 
-def distill(
+def distill(*args: Any, **kwargs: Any) -> Path:
+    """:func:`run_distillation` with PyTorch on one thread (deterministic for a seed,
+    whatever the core count; :func:`agents.backends.one_torch_thread`)."""
+    with one_torch_thread():
+        return run_distillation(*args, **kwargs)
+
+
+def run_distillation(
     env_id: str,
     run_dir: str | Path,
     seed: int = 0,
@@ -115,8 +123,8 @@ def distill(
     iterations: int = 6,
     steps_per_iteration: int = 400,
     beta: float = 0.5,
-    epochs: int = 4,
-    batch_size: int = 256,
+    epochs: int = 3,
+    batch_size: int = 1024,
     net_arch: tuple[int, ...] = (64, 64),
     teacher: OraclePolicy | None = None,
     env_kwargs: dict[str, Any] | None = None,
