@@ -63,7 +63,8 @@ def main() -> None:
     for name, e in err.items():
         dt, pt, wt = paired(e, tuned)
         do, po, _ = paired(e, oracle) if oracle is not None else (float("nan"),) * 3
-        closed = (tuned.mean() - e.mean()) / gap if gap else float("nan")
+        # undefined when the oracle is no better than tuned (no gap to close)
+        closed = (tuned.mean() - e.mean()) / gap if gap > 0 else float("nan")
         if re.search(r"seed\d+$", name):
             closed_by_seed.append((name, e.mean(), closed, dt, pt))
         row = [
@@ -76,17 +77,22 @@ def main() -> None:
             f"{100 * np.mean(e < tuned):.0f} %",
             f"{do:+.4f}",
             f"{po:.2g}",
-            f"{100 * closed:.0f} %",
+            "—" if np.isnan(closed) else f"{100 * closed:.0f} %",
         ]
         print("| " + " | ".join(row) + " |" if args.markdown else "  ".join(row))
     if len(closed_by_seed) > 1:
         means = np.array([m for _, m, _, _, _ in closed_by_seed])
         closes = np.array([c for _, _, c, _, _ in closed_by_seed])
+        closed_text = (
+            "gap closed — (no gap)"
+            if np.isnan(closes).any()
+            else f"gap closed {100 * closes.mean():.0f} % "
+            f"(range {100 * closes.min():.0f}–{100 * closes.max():.0f} %)"
+        )
         print(
             f"training seeds ({len(means)}): mean error {means.mean():.4f} "
             f"± {means.std(ddof=1):.4f} (std), range [{means.min():.4f}, {means.max():.4f}]; "
-            f"gap closed {100 * closes.mean():.0f} % "
-            f"(range {100 * closes.min():.0f}–{100 * closes.max():.0f} %)"
+            + closed_text
         )
 
 
