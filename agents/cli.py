@@ -39,8 +39,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from agents.cli_distill import add_distill_command
 from agents.cli_recordings import add_recording_commands
-from agents.cli_types import positive_int
+from agents.cli_types import positive_float, positive_int
 from pednav_env import __version__
 
 
@@ -229,27 +230,6 @@ def _cmd_tune(args: argparse.Namespace) -> int:
             "--install replaces the shipped `tuned` baseline",
             file=sys.stderr,
         )
-    return 0
-
-
-def _cmd_distill(args: argparse.Namespace) -> int:
-    from agents.distill import distill
-
-    base = Path(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/distill")
-    for seed in args.seeds:
-        run_dir = base / f"seed{seed}" if len(args.seeds) > 1 else base
-        distill(
-            args.env_id,
-            run_dir,
-            seed=seed,
-            lanes=args.lanes,
-            iterations=args.iterations,
-            steps_per_iteration=args.steps,
-            on_iteration=lambda i, loss: print(
-                f"iteration {i}: loss {loss:.4f}", file=sys.stderr, flush=True
-            ),
-        )
-        print(f"saved {run_dir / 'model.zip'} (+ vecnormalize.pkl, meta.json)")
     return 0
 
 
@@ -493,7 +473,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     tu.add_argument(
         "--sigma0",
-        type=_positive_float,
+        type=positive_float,
         default=0.25,
         help="--per-context: CMA-ES initial step size around the shipped constant",
     )
@@ -501,25 +481,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_backend_options(tu, "a generation's candidates run")
     tu.set_defaults(func=_cmd_tune)
 
-    di = sub.add_parser(
-        "distill",
-        help="train a sensor-only tuner from the privileged oracle (DAgger)",
-        description="Teacher–student distillation (agents/distill.py): the student, the actor "
-        "of a PPO MlpPolicy over the observation and its episode history, regresses the "
-        "oracle's action along its own rollouts on training episodes. Writes a run directory "
-        "(model.zip, vecnormalize.pkl, meta.json) for `pednav evaluate --policy RUN_DIR`.",
-    )
-    di.add_argument("env_id", help="pednav/WaistStep-v0 or pednav/MarkerTrack-v0")
-    di.add_argument(
-        "--seeds", type=int, nargs="+", default=[0], help="training run seeds (one run each)"
-    )
-    di.add_argument("--iterations", type=_positive_int, default=6, help="DAgger iterations")
-    di.add_argument(
-        "--steps", type=_positive_int, default=400, help="decision steps per iteration and lane"
-    )
-    di.add_argument("--lanes", type=_positive_int, default=64, help="parallel episodes")
-    di.add_argument("--run-dir", default=None, help="output dir (default runs/ENV/distill[/seedS])")
-    di.set_defaults(func=_cmd_distill)
+    add_distill_command(sub)
 
     be = sub.add_parser("bench", help="throughput of a native vector env vs filterpy")
     be.add_argument("env", help="foot, waist or marker")

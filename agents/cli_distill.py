@@ -1,0 +1,53 @@
+"""``pednav distill``: the teacher–student tuner (:mod:`agents.distill`) from the command line."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from agents.cli_types import positive_int
+
+
+def run_distill(args: argparse.Namespace) -> int:
+    from agents.distill import distill
+
+    base = Path(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/distill")
+    for seed in args.seeds:
+        run_dir = base / f"seed{seed}" if len(args.seeds) > 1 else base
+        distill(
+            args.env_id,
+            run_dir,
+            seed=seed,
+            lanes=args.lanes,
+            iterations=args.iterations,
+            steps_per_iteration=args.steps,
+            on_iteration=lambda i, loss: print(
+                f"iteration {i}: loss {loss:.4f}", file=sys.stderr, flush=True
+            ),
+        )
+        print(f"saved {run_dir / 'model.zip'} (+ vecnormalize.pkl, meta.json)")
+    return 0
+
+
+def add_distill_command(sub: argparse._SubParsersAction) -> None:
+    """Add ``pednav distill`` to the subcommands."""
+    di = sub.add_parser(
+        "distill",
+        help="train a sensor-only tuner from the privileged oracle (DAgger)",
+        description="Teacher–student distillation (agents/distill.py): the student, the actor "
+        "of a PPO MlpPolicy over the observation and its episode history, regresses the "
+        "oracle's action along its own rollouts on training episodes. Writes a run directory "
+        "(model.zip, vecnormalize.pkl, meta.json) for `pednav evaluate --policy RUN_DIR`.",
+    )
+    di.add_argument("env_id", help="pednav/WaistStep-v0 or pednav/MarkerTrack-v0")
+    di.add_argument(
+        "--seeds", type=int, nargs="+", default=[0], help="training run seeds (one run each)"
+    )
+    di.add_argument("--iterations", type=positive_int, default=6, help="DAgger iterations")
+    di.add_argument(
+        "--steps", type=positive_int, default=400, help="decision steps per iteration and lane"
+    )
+    di.add_argument("--lanes", type=positive_int, default=64, help="parallel episodes")
+    di.add_argument("--run-dir", default=None, help="output dir (default runs/ENV/distill[/seedS])")
+    di.set_defaults(func=run_distill)
