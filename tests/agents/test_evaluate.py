@@ -180,9 +180,9 @@ def test_cli_evaluate_and_errors(capsys, tmp_path):
         assert (tmp_path / name).stat().st_size > 10_000
     out = json.loads(capsys.readouterr().out)
     assert out["policies"][0]["name"] == "paper" and out["episodes"] == 2
-    assert main(["evaluate", ENV_ID, "--policy", "oracle", "--episodes", "1"]) == 2
+    assert main(["evaluate", ENV_ID, "--policy", "soothsayer", "--episodes", "1"]) == 2
     err = capsys.readouterr().err
-    assert "unknown policy 'oracle'" in err and err.count("\n") == 1
+    assert "unknown policy 'soothsayer'" in err and err.count("\n") == 1
     for name in ("paper", "tuned", "adaptive", "pretrained"):
         assert name in err
     assert "real-fixed" not in err  # pednav run's setup, not an evaluate policy
