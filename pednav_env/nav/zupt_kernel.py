@@ -275,7 +275,7 @@ def new_update_log(rows: int) -> UpdateLog:
 
 
 # ------------------------------------------------------------------ ZUPT
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def zupt(
     i: int,
     j: int,
@@ -325,7 +325,7 @@ def zupt(
     return ok, nis, n_log
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def new_anchor(Wm: np.ndarray, sig: SigmaPoints, pre: Preintegral, sums: AnchorSums) -> bool:
     """Preintegrals restarted at the sigma points and their weighted sums taken.
     Returns whether the central attitude is non-finite."""
