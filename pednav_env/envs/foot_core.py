@@ -399,7 +399,7 @@ class FootZuptCore:
         # stopping early never pays: the return stays minus the time-average.
         tail = np.maximum(self.length - self.cursor, 0) / self.nav_samples
         reward = -err * (weight + np.where(terminated, tail, 0.0))
-        self.last_error = err
+        self.last_error = err.copy()  # info["error"] must not change when a lane resets
         new_updates = e.updates - updates0
         interval = {
             "omega": omega,

@@ -313,7 +313,7 @@ class WaistStepCore:
         # stopping early never pays: the return stays minus the time-average.
         tail = np.maximum(self.length - 1 - self.cursor, 0) / nav
         reward = -err * (weight + np.where(terminated, tail, 0.0))
-        self.last_error = err
+        self.last_error = err.copy()  # info["error"] must not change when a lane resets
         updates = self.kf.steps - updates0
         interval = {
             "fn": fn,

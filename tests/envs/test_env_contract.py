@@ -129,7 +129,10 @@ def test_vector_lanes_equal_scalar_envs_bit_for_bit(env_id):
     a scalar env reset with ``seed + i`` (two episodes per lane, so the SAME_STEP
     autoreset is crossed): observations, rewards, flags and every info entry; a
     finished lane reports its last observation and info in ``final_obs`` /
-    ``final_info`` and already returns the next episode's first observation."""
+    ``final_info`` and already returns the next episode's first observation; its
+    top-level step entries (``error``, ``distance``, …) stay the finished step's,
+    its episode descriptors (``context``, the sensor grade, …) are the new
+    episode's."""
     n, seed = 3, 20
     venv = make_vec(env_id, n)
     k = venv.single_action_space.shape[0]
@@ -150,6 +153,12 @@ def test_vector_lanes_equal_scalar_envs_bit_for_bit(env_id):
         for i in range(n):
             if done[i]:
                 step_info = info["final_info"][i]
+                # top level after an autoreset: the step's entries are the finished
+                # episode's (as in final_info), the descriptors (the reset info's
+                # keys) the new episode's
+                for key, value in step_info.items():
+                    if key not in lanes[i]["resets"][0]:
+                        np.testing.assert_array_equal(info[key][i], value, err_msg=key)
                 lanes[i]["obs"].append(info["final_obs"][i])
                 assert venv.single_observation_space.contains(info["final_obs"][i])
             else:
