@@ -1,6 +1,6 @@
 """Imports run one way, gait → sensors → nav → envs → baselines → agents (io, replay,
 reproduce, calibration and testing are side packages; seeds and sb3 sit beside envs), and
-no module imports another's ``_private``."""
+no module imports another's ``_private`` — nor does a test (tests use the public API)."""
 
 import ast
 from pathlib import Path
@@ -44,6 +44,33 @@ def unit(name: str) -> str | None:
     ):
         return rest[0]  # a subpackage or module: a new one must be given a row in MAY_IMPORT
     return top if top in ("pednav_env", "baselines", "agents") else None
+
+
+def private_imports(path: Path) -> list[str]:
+    """Private names (``_x``, not dunders) that ``path`` imports from the project."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module:
+            full = [f"{node.module}.{a.name}" for a in node.names]
+        elif isinstance(node, ast.Import):
+            full = [a.name for a in node.names]
+        else:
+            continue
+        for name in full:
+            if unit(name) is None:
+                continue
+            if any(p.startswith("_") and not p.endswith("__") for p in name.split(".")):
+                found.append(name)
+    return found
+
+
+def test_tests_import_no_private_names_of_the_project():
+    found = {
+        str(path.relative_to(ROOT)): names
+        for path in (ROOT / "tests").rglob("*.py")
+        if (names := private_imports(path))
+    }
+    assert not found, f"tests importing private names (use the public API): {found}"
 
 
 def test_imports_follow_the_layers_and_leave_private_names_alone():

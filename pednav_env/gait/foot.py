@@ -141,7 +141,7 @@ class FootTrajectory:
 
 
 @dataclass(frozen=True)
-class _Schedule:
+class HeelSchedule:
     """One walk: heel position and Euler angles as a piecewise cubic, and its events.
 
     The cubic pieces use ``scipy.interpolate.PPoly``'s layout and arithmetic
@@ -168,7 +168,7 @@ class _Schedule:
         return PPoly(self.coefs.transpose(0, 2, 1), self.breaks, extrapolate=True)
 
 
-def _build_schedule(route: Route) -> _Schedule:
+def build_schedule(route: Route) -> HeelSchedule:
     """Piecewise polynomial of heel position and Euler angles for one walk.
 
     Stride by stride (paper 003, "Имитационное моделирование"): a constant Γ₀
@@ -302,7 +302,7 @@ def _build_schedule(route: Route) -> _Schedule:
     moving = np.any(coefs[:3] != 0, axis=0)  # (6, P): the row varies in the piece
     level = (coefs[3, 4] == 0) & (coefs[3, 5] == 0)
     kind = np.where(~moving.any(axis=0) & level, STANCE, np.where(moving[3], TURNING, STRAIGHT))
-    return _Schedule(
+    return HeelSchedule(
         breaks,
         coefs,
         stance_start,
@@ -345,7 +345,7 @@ def imu_kinematics(
     return pos, vel, acc, omega, f_b
 
 
-def _kernel_walk(sched: _Schedule, route: Route) -> tuple[Array, ...]:
+def _kernel_walk(sched: HeelSchedule, route: Route) -> tuple[Array, ...]:
     """The walk as the tuple of arrays the kernels of :mod:`pednav_env.gait.foot_kernels`
     take: breaks, coefficients, piece kinds, sin ψ and cos ψ of every piece's constant
     term; roll-over windows (start, end, speed) and micro-motion phases; heel strikes
@@ -384,7 +384,7 @@ def _kernel_walk(sched: _Schedule, route: Route) -> tuple[Array, ...]:
 
 
 def _simulate_walk(
-    sched: _Schedule,
+    sched: HeelSchedule,
     route: Route,
     t_grid: Array,
     cfg: FootSimConfig,
@@ -448,7 +448,7 @@ def simulate_foot(
     gait_step = np.zeros((n, n_samples), dtype=np.int64)
     gait = np.zeros((n, n_samples), dtype=np.int8)
     for i, route in enumerate(routes):
-        sched = _build_schedule(route)
+        sched = build_schedule(route)
         _simulate_walk(
             sched,
             route,

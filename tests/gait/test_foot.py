@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pednav_env.constants import STANDARD_GRAVITY
-from pednav_env.gait.foot import FootSimConfig, _build_schedule, simulate_foot
+from pednav_env.gait.foot import FootSimConfig, build_schedule, simulate_foot
 from pednav_env.gait.foot_route import (
     Gait,
     RouteRandomization,
@@ -46,7 +46,7 @@ def test_paper_square_closes_and_has_the_right_length(paper_walk):
 
 def test_spline_is_c2_inside_moving_phases_and_c1_at_stances():
     route = square_route(2.0, paper_stride_shape(1.0))
-    pp = _build_schedule(route).pp
+    pp = build_schedule(route).pp
     eps = 1e-7
     stance_breaks = []
     for i, b in enumerate(pp.x[1:-1], start=1):
