@@ -76,15 +76,20 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from agents.evaluate import MAX_LANES, evaluate
     from agents.evaluate_report import format_table
     from agents.progress import progress_bar, wanted
+    from pednav_env.io import find_recordings
 
     env_kwargs = env_kwargs_from_args(args)
     backend = backend_from_args(args)
-    total = args.episodes * (len(set(args.policy) | {"paper"}))
+    episodes = args.episodes
+    if episodes is None:  # one episode per recording, else 100
+        data_dir = env_kwargs.get("data_dir")
+        episodes = len(find_recordings(data_dir)) if data_dir is not None else 100
+    total = episodes * (len(set(args.policy) | {"paper"}))
     with progress_bar("episodes", total, wanted(args.json)) as advance:
         result = evaluate(
             args.env_id,
             args.policy,
-            args.episodes,
+            episodes,
             args.seed,
             env_kwargs,
             args.plot,
@@ -211,7 +216,12 @@ def build_parser() -> argparse.ArgumentParser:
         "saved SB3 model (.zip, with vecnormalize.pkl beside it), or a tuned_actions.json "
         "from pednav tune (or its run directory)",
     )
-    ev.add_argument("--episodes", type=positive_int, default=100, help="episodes per policy")
+    ev.add_argument(
+        "--episodes",
+        type=positive_int,
+        default=None,
+        help="episodes per policy (default 100; with --recordings: one per recording)",
+    )
     ev.add_argument(
         "--seed",
         type=int,

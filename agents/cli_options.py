@@ -82,8 +82,9 @@ def add_env_options(p: argparse.ArgumentParser) -> None:
         "--recordings",
         metavar="DIR",
         default=None,
-        help="for pednav/FootZuptReplay-v0: the folder of recordings (its data_dir); "
-        "each episode plays a trial drawn by its seed",
+        help="for pednav/FootZuptReplay-v0: the folder of recordings with a truth track "
+        "(its data_dir); evaluate plays them in name order, the episode of seed S+k "
+        "recording k (mod their number), so every policy plays each once",
     )
     p.add_argument(
         "--env-kwarg",

@@ -27,6 +27,14 @@ The JSON object is described in docs/CONTRACTS.md ("pednav evaluate")::
 The tuned constant (``tuned``) is played whether named or not when one is shipped
 for the env, as the paper policy is, for ``vs_tuned``.
 
+Replay env (recordings): the episodes play the recordings in sequential order
+(``trial_order="sequential"``, ``first_trial_seed`` = the first seed, unless the
+env arguments say otherwise): the episode of seed s plays recording (s − S) mod n
+of the n recordings sorted by name, the same for every policy, so N = n episodes
+play each recording once and the paired tests pair the same recording. The JSON
+adds ``episode_recordings``: the recording of each episode, in seed order (the
+order of every policy's ``episode_errors``).
+
 Foot envs (filter families, :mod:`agents.policies`): each policy plays on its
 own family (``"filter"`` in its entry); ``vs_paper`` and ``vs_tuned`` compare it
 with its family's action 0 (``paper`` or ``real-fixed``, played whether named
@@ -58,6 +66,7 @@ from pednav_env.seeds import check_evaluation_seeds
 __all__ = [
     "BUILTIN_POLICIES",
     "MAX_LANES",
+    "RECORDING_ENVS",
     "EpisodeBatch",
     "EpisodeResult",
     "evaluate",
@@ -69,6 +78,8 @@ __all__ = [
 
 #: Lanes per batch when evaluating many episodes.
 MAX_LANES = 128
+#: Envs whose episodes are recordings (played in sequential order, module docstring).
+RECORDING_ENVS = ("pednav/FootZuptReplay-v0",)
 
 
 @dataclass(frozen=True)
@@ -82,6 +93,8 @@ class EpisodeResult:
     diverged: bool
     #: horizontal error (m) at the end of each decision interval
     error_trace: tuple[float, ...] = ()
+    #: the recording the episode played (replay env), else None
+    trial: str | None = None
 
     @property
     def final_error_pct(self) -> float:
@@ -180,6 +193,7 @@ def play_batch(
                 distance=float(info["distance"]),
                 diverged=not bool(info["TimeLimit.truncated"]),
                 error_trace=tuple(traces[i]),
+                trial=str(info["trial"]) if "trial" in info else None,
             )
             if on_episode is not None:
                 on_episode(1)
@@ -313,6 +327,9 @@ def evaluate(
     check_evaluation_seeds(seed, episodes)
     if plot_dir is not None and Path(plot_dir).exists() and not Path(plot_dir).is_dir():
         raise ValueError(f"plot directory {str(plot_dir)!r} is a file")
+    if env_id in RECORDING_ENVS:
+        env_kwargs.setdefault("trial_order", "sequential")
+        env_kwargs.setdefault("first_trial_seed", seed)
     check_env_kwargs(env_id, env_kwargs)
     probe = gym.make(env_id, **env_kwargs)
     action_space = probe.action_space
@@ -348,7 +365,21 @@ def evaluate(
             summarize(name, outcomes[name], outcomes["paper"], outcomes.get("tuned"))
             for name in policy_names
         ],
+        **recordings_played(outcomes),
     }
+
+
+def recordings_played(outcomes: dict[Any, list[EpisodeResult]]) -> dict[str, Any]:
+    """``{"episode_recordings": [...]}`` (seed order) when the episodes played
+    recordings, else ``{}``; every policy must have played the same recording
+    on the same seed (the pairing), a RuntimeError otherwise."""
+    orders = {tuple(r.trial for r in res) for res in outcomes.values()}
+    if len(orders) != 1:
+        raise RuntimeError("policies played different recordings on the same seeds")
+    order = orders.pop()
+    if not order or order[0] is None:
+        return {}
+    return {"episode_recordings": list(order)}
 
 
 def play_plan(
@@ -434,4 +465,10 @@ def evaluate_families(
             paper_name=zero,
         )
         entries.append({**entry, "filter": family})
-    return {"env": env_id, "episodes": episodes, "seed": seed, "policies": entries}
+    return {
+        "env": env_id,
+        "episodes": episodes,
+        "seed": seed,
+        "policies": entries,
+        **recordings_played(outcomes),
+    }

@@ -93,7 +93,29 @@ def format_table(result: dict[str, Any]) -> str:
             zero = ZERO_ACTION[family]
             lines.append(f"filter family {family} (action 0 = {zero}; Δ and p: paired with {zero})")
         lines.extend(_rows(entries, show_pct, with_tuned))
+    if result.get("episode_recordings"):
+        lines += ["", *recording_rows(result)]
     return "\n".join(lines)
+
+
+def recording_rows(result: dict[str, Any]) -> list[str]:
+    """Per recording (replay env): each policy's error on it, by seed, one column
+    per policy of the table above."""
+    names = result["episode_recordings"]
+    heads = [short_name(p["name"], 16) for p in result["policies"]]
+    widths = [max(len(h), 8) for h in heads]
+    first = max(len("recording"), *(len(n) for n in names))
+    head = f"{'seed':>6} {'recording':<{first}} " + " ".join(
+        f"{h:>{w}}" for h, w in zip(heads, widths, strict=True)
+    )
+    lines = ["error (m) per recording, by seed:", head, "-" * len(head)]
+    for k, name in enumerate(names):
+        cells = [
+            f"{p['episode_errors'][k]:>{w}.3f}"
+            for p, w in zip(result["policies"], widths, strict=True)
+        ]
+        lines.append(f"{result['seed'] + k:>6} {name:<{first}} " + " ".join(cells))
+    return lines
 
 
 def _rows(entries: list[dict[str, Any]], show_pct: bool, with_tuned: bool) -> list[str]:

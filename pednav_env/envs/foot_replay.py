@@ -22,13 +22,34 @@ class ReplayFront:
     env_id = ENV_ID
     core_cls = FootReplayCore
     config_cls = FootReplayConfig
-    arguments = ("data_dir", "filter", "decision_interval_s", "tune_min_stance")
+    arguments = (
+        "data_dir",
+        "filter",
+        "decision_interval_s",
+        "tune_min_stance",
+        "trial_order",
+        "first_trial_seed",
+    )
     core: FootReplayCore
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.replay_config: FootReplayConfig = self.config
         self.config = self.core.config
+
+    def reset(self, *, seed: Any = None, options: dict | None = None):
+        """The env's reset; in sequential trial order the seed also picks the trial
+        (lane i of a vector env: seed s + i, as for the episode draw)."""
+        if seed is not None:
+            n = int(getattr(self, "num_envs", 1))
+            if isinstance(seed, int | np.integer):
+                seeds: list[Any] = [int(seed) + i for i in range(n)]
+            else:
+                seeds = list(seed)
+            lanes = [i for i, s in enumerate(seeds) if s is not None]
+            if len(seeds) == n:  # a wrong length is the vector env's error
+                self.core.seed_trials(np.array(lanes), [seeds[i] for i in lanes])
+        return super().reset(seed=seed, options=options)  # type: ignore[misc]
 
     @classmethod
     def build_config(cls, config: Any, arguments: dict[str, Any]) -> Any:
@@ -61,7 +82,12 @@ class FootZuptReplayEnv(ReplayFront, FootZuptEnv):
 
     An episode is one whole trial, chosen by the reset seed (uniformly) from
     the recordings in ``data_dir`` (``.mat`` PyShoe trials or CSV files with
-    truth columns, :mod:`pednav_env.io`; all at one sample rate). Before the
+    truth columns, :mod:`pednav_env.io`; all at one sample rate; a recording
+    without a truth track, e.g. a footprint-only hallway walk, is refused
+    naming it). With ``trial_order="sequential"`` the episode of seed s plays
+    trial (s − ``first_trial_seed``) mod n of the n recordings sorted by name,
+    and a lane's next episode the next one (``pednav evaluate`` plays every
+    recording once this way). Before the
     filter sees them the samples are put on a uniform grid, rotated so that
     the still start's specific force points up, and the still start (at most
     1 s) is the alignment window (paper 003 eq 4).
@@ -94,8 +120,8 @@ class FootZuptReplayEnv(ReplayFront, FootZuptEnv):
 
     ## Arguments
     ``gymnasium.make("pednav/FootZuptReplay-v0", data_dir=DIR, filter="paper",
-    decision_interval_s=0.5, tune_min_stance=False, config=None,
-    render_mode=None)``; ``config`` is a full
+    decision_interval_s=0.5, tune_min_stance=False, trial_order="random",
+    first_trial_seed=0, config=None, render_mode=None)``; ``config`` is a full
     :class:`pednav_env.envs.foot_replay_core.FootReplayConfig` (filter setup,
     reference setup, load options, divergence bounds). ``data_dir`` is required.
 

@@ -49,6 +49,8 @@ Array = NDArray[np.float64]
 TRUTH_STANCE_SPEED = 0.15
 #: Smoothing of the truth for speed and distance (s).
 TRUTH_SMOOTHING_S = 0.05
+#: How episodes choose their trial (:class:`FootReplayConfig`).
+TRIAL_ORDERS = ("random", "sequential")
 
 
 def family_setup(family: str) -> RealFilterSetup:
@@ -73,6 +75,12 @@ class FootReplayConfig:
     family's, :func:`family_setup`); its detector must be the family's (eq 5
     or SHOE: the knobs set its thresholds). ``reference``: the named setup
     whose run fixes the truth heading (``real-fixed``).
+    ``trial_order``: ``"random"`` (training) — each episode draws its trial
+    uniformly from the lane's generator; ``"sequential"`` (evaluation, what
+    ``pednav evaluate`` sets) — the episode of reset seed s plays trial
+    (s − ``first_trial_seed``) mod n of the n recordings sorted by name, and a
+    lane's next episode (reset without a seed, or autoreset) the next trial, so
+    n consecutive seeds play every recording once.
     """
 
     data_dir: str | None = None
@@ -84,6 +92,8 @@ class FootReplayConfig:
     divergence_error_m: float = 25.0
     divergence_error_fraction: float = 0.25
     load_options: LoadOptions = field(default_factory=LoadOptions)
+    trial_order: str = "random"
+    first_trial_seed: int = 0
 
     def __post_init__(self) -> None:
         if self.data_dir is not None and not Path(self.data_dir).is_dir():
@@ -102,6 +112,18 @@ class FootReplayConfig:
         require_positive("divergence_error_m", self.divergence_error_m)
         require_nonnegative("divergence_error_fraction", self.divergence_error_fraction)
         named_setup(self.reference)  # validates the name
+        if self.trial_order not in TRIAL_ORDERS:
+            raise ValueError(
+                f"FootReplayConfig.trial_order must be one of {TRIAL_ORDERS}, "
+                f"got {self.trial_order!r}"
+            )
+        if isinstance(self.first_trial_seed, bool) or not isinstance(
+            self.first_trial_seed, int | np.integer
+        ):
+            raise ValueError(
+                f"FootReplayConfig.first_trial_seed must be an integer, "
+                f"got {self.first_trial_seed!r}"
+            )
 
 
 @dataclass
@@ -192,9 +214,9 @@ class FootReplayCore(FootZuptCore):
         if not self.paths:
             raise ValueError(f"{config.data_dir}: no recordings (.mat, .csv) found")
         self.trials: dict[int, Trial] = {}
-        rate, self.capacity = self._peek(0)
+        rate, self.capacity = self._peek(0, env_name)
         for i in range(1, len(self.paths)):
-            rec_rate, samples = self._peek(i)
+            rec_rate, samples = self._peek(i, env_name)
             if abs(rec_rate - rate) > 0.01 * rate:
                 raise ValueError(
                     f"{env_name}: recordings at different rates: {self.paths[0].name} "
@@ -221,12 +243,23 @@ class FootReplayCore(FootZuptCore):
         self.trial_index = np.zeros(n, dtype=np.int64)
         self.trial_name = ["" for _ in range(n)]
         self.heading_offset = np.zeros(n)
+        #: Sequential order: the trial each lane plays next.
+        self.next_trial = np.zeros(n, dtype=np.int64)
 
-    def _peek(self, i: int) -> tuple[float, int]:
-        """(rate, uniform samples) of recording i without the reference run."""
+    def _peek(self, i: int, env_name: str) -> tuple[float, int]:
+        """(rate, uniform samples) of recording i without the reference run; a
+        recording of ``data_dir`` without a truth track is refused here, naming it."""
         from pednav_env.io.uniform import grid_steps
 
-        nominal, steps = grid_steps(self._recording(i).time)
+        rec = self._recording(i)
+        if self.recordings is None and not rec.has_truth:
+            what = "it has footprints only" if rec.footprints is not None else "it has none"
+            raise ValueError(
+                f"{env_name}: {self.paths[i]}: no truth track ({what}); the reward needs the "
+                "truth at every sample. Footprint walks are scored by `pednav run DIR` "
+                "(footprint errors)"
+            )
+        nominal, steps = grid_steps(rec.time)
         return 1.0 / nominal, int(steps.sum()) + 1
 
     def _recording(self, i: int) -> Recording:
@@ -245,11 +278,25 @@ class FootReplayCore(FootZuptCore):
     def num_trials(self) -> int:
         return len(self.paths)
 
+    def seed_trials(self, lanes: NDArray[np.integer], seeds: list[int]) -> None:
+        """Sequential order: the next episode of ``lanes[j]`` plays trial
+        (``seeds[j]`` − ``first_trial_seed``) mod n (no effect in random order)."""
+        if self.replay_config.trial_order == "sequential":
+            first = self.replay_config.first_trial_seed
+            for lane, seed in zip(lanes, seeds, strict=True):
+                self.next_trial[lane] = (int(seed) - first) % self.num_trials
+
     def reset_lanes(self, lanes: NDArray[np.integer], rngs: list[np.random.Generator]) -> None:
-        """Start new episodes in ``lanes``: trial drawn from each lane's generator."""
+        """Start new episodes in ``lanes``: trial drawn from each lane's generator, or
+        in sequential order the lane's next trial (:class:`FootReplayConfig`)."""
         lanes = np.asarray(lanes, dtype=np.int64)
+        sequential = self.replay_config.trial_order == "sequential"
         for lane, rng in zip(lanes, rngs, strict=True):
-            i = int(rng.integers(self.num_trials))
+            if sequential:
+                i = int(self.next_trial[lane])
+                self.next_trial[lane] = (i + 1) % self.num_trials
+            else:
+                i = int(rng.integers(self.num_trials))
             tr = self._trial(i)
             p = tr.prepared
             self.load_lane(lane, p.omega_b, p.f_b, tr.pos_n, tr.stance, tr.distance_m)

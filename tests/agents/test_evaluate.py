@@ -6,7 +6,7 @@ import time
 import gymnasium as gym
 import numpy as np
 import pytest
-from testdata import REPLAY_DATA
+from testdata import HALLWAY_DATA, REPLAY_DATA
 
 from agents.bench.timing import bench_native_vs_reference
 from agents.cli import main
@@ -199,6 +199,52 @@ def test_unknown_policy_in_pednav_run_lists_real_fixed():
         load("bogus", space, ENV_ID, other_names=SETUP_NAMES)
     for name in ("paper", "tuned", "adaptive", "pretrained", "real-fixed"):
         assert name in str(exc.value)
+
+
+def test_replay_evaluation_plays_each_recording_once_paired_by_recording(
+    three_recordings, tmp_path, capsys
+):
+    """`pednav evaluate` over a folder: one episode per recording by default, in name
+    order from the first seed, for every policy; each episode's error is that of its
+    recording evaluated alone; the text table names each recording."""
+    replay = "pednav/FootZuptReplay-v0"
+    args = ["evaluate", replay, "--policy", "paper", "real-fixed", "--seed", "20000"]
+    assert main([*args, "--recordings", str(three_recordings), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["episodes"] == 3 and out["episode_recordings"] == ["a", "b", "c"]
+    by_name = {p["name"]: p for p in out["policies"]}
+    assert all(len(p["episode_errors"]) == 3 for p in out["policies"])
+    for k, name in enumerate(["a", "b", "c"]):
+        alone = tmp_path / name
+        alone.mkdir()
+        (alone / f"{name}.mat").write_bytes((three_recordings / f"{name}.mat").read_bytes())
+        assert main([*args, "--recordings", str(alone), "--json"]) == 0
+        single = json.loads(capsys.readouterr().out)
+        assert single["episodes"] == 1 and single["episode_recordings"] == [name]
+        for p in single["policies"]:
+            # not bit for bit: the replay env runs every trial at its folder's first
+            # recording's rate (200.1230 Hz; b.mat alone: 200.1236 Hz, docs/REAL_DATA.md)
+            np.testing.assert_allclose(
+                by_name[p["name"]]["episode_errors"][k], p["episode_errors"][0], rtol=1e-3
+            )
+    # the recordings differ, so the check above can tell them apart
+    assert len(set(by_name["real-fixed"]["episode_errors"])) == 3
+    assert main([*args, "--recordings", str(three_recordings)]) == 0
+    text = capsys.readouterr().out
+    assert "error (m) per recording, by seed:" in text
+    for k, name in enumerate(["a", "b", "c"]):
+        row = next(line for line in text.splitlines() if line.split()[:2] == [str(20000 + k), name])
+        err = by_name["paper"]["episode_errors"][k]
+        assert f"{err:.3f}" in row
+
+
+def test_replay_evaluation_refuses_footprint_walks_in_one_line(capsys):
+    """Hallway walks (footprints only) cannot be replay episodes: one line naming the file."""
+    args = ["evaluate", "pednav/FootZuptReplay-v0", "--policy", "real-fixed"]
+    assert main([*args, "--recordings", str(HALLWAY_DATA)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("pednav: error: pednav/FootZuptReplay-v0: ") and err.count("\n") == 1
+    assert "SensorConnectData_31_first5s.csv: no truth track" in err and "pednav run" in err
 
 
 def test_replay_env_evaluates_with_recordings_and_rejects_a_scenario(capsys):

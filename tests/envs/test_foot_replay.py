@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from env_rollout import rollout
-from testdata import REPLAY_DATA
+from testdata import HALLWAY_DATA, REPLAY_DATA
 
 import pednav_env  # noqa: F401  (registers the environments)
 from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
@@ -54,6 +54,40 @@ def test_bad_data_directories():
         gym.make(ENV_ID)
     with pytest.raises(ValueError, match="not a directory"):
         gym.make(ENV_ID, data_dir=str(REPLAY_DATA / "nope"))
+    # footprint-only walks: refused at construction, naming the first such file
+    with pytest.raises(ValueError, match=r"first5s\.csv: no truth track \(it has footprints"):
+        gym.make(ENV_ID, data_dir=str(HALLWAY_DATA))
+    with pytest.raises(ValueError, match="trial_order must be one of"):
+        gym.make(ENV_ID, data_dir=str(REPLAY_DATA), trial_order="shuffled")
+
+
+def test_sequential_order_plays_every_recording_once_in_name_order(three_recordings):
+    """trial_order="sequential": seed s plays recording (s − first_trial_seed) mod n of the
+    sorted names, a lane's next episode the next one; lane i of a vector env seeded s
+    plays what the scalar env seeded s + i plays."""
+    kwargs = {"data_dir": str(three_recordings), "trial_order": "sequential"}
+    env = gym.make(ENV_ID, first_trial_seed=100, **kwargs)
+    trials = [env.reset(seed=101)[1]["trial"]] + [env.reset()[1]["trial"] for _ in range(3)]
+    assert trials == ["b", "c", "a", "b"]
+    assert env.reset(seed=100)[1]["trial"] == "a"
+    venv = gym.make_vec(
+        ENV_ID, num_envs=4, vectorization_mode="vector_entry_point", first_trial_seed=7, **kwargs
+    )
+    _, info = venv.reset(seed=7)
+    assert list(info["trial"]) == ["a", "b", "c", "a"]
+    lengths = {"a": 7.0, "b": 6.0, "c": 5.0}
+    while True:  # c (5 s) ends first; lane 2 then starts its next trial, a
+        _, _, term, trunc, info = venv.step(np.zeros((4, 4), np.float32))
+        if (term | trunc).any():
+            break
+    assert list(np.flatnonzero(term | trunc)) == [2]
+    assert info["final_info"][2]["trial"] == "c" and info["trial"][2] == "a"
+    assert min(lengths, key=lengths.get) == "c"
+    # random order (the default, training) draws: not every 3 seeds cover the three
+    draws = [
+        gym.make(ENV_ID, data_dir=str(three_recordings)).reset(seed=s)[1]["trial"] for s in range(6)
+    ]
+    assert len(set(draws[:3])) < 3 or len(set(draws[3:])) < 3
 
 
 @pytest.mark.parametrize("family", ["paper", "shoe"])
