@@ -49,6 +49,11 @@ DEFAULT_POLICY = "real-fixed"
 
 #: The simulated env whose policies (tuned, adaptive, pretrained) are used.
 SIM_ENV_ID = "pednav/FootZupt-v0"
+#: Why the privileged oracle does not run on a recording.
+ORACLE_ON_RECORDINGS = (
+    "oracle: not applicable on recordings: it plays the constant of the simulator's true "
+    "context (speed band, IMU grade), which a recording does not give it"
+)
 
 
 def _load_policy(name: str, action_space: Any) -> Any:
@@ -64,10 +69,15 @@ def run_with_policy(
     :func:`pednav_env.replay.runner.run_prepared`'s) and the knob schedule."""
     from gymnasium import spaces
 
+    from agents.policies import split_name
     from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
 
+    if split_name(policy_name)[0] == "oracle":
+        raise ValueError(ORACLE_ON_RECORDINGS)
     # the action space is the same for both filter families (four knobs)
     policy = _load_policy(policy_name, spaces.Box(-1.0, 1.0, (4,), np.float32))
+    if getattr(policy, "needs_context", False):
+        raise ValueError(ORACLE_ON_RECORDINGS)
     family = getattr(policy, "filter_family", None) or "paper"
     config = FootReplayConfig(decision_interval_s=interval_s, filter_family=family)
     core = FootReplayCore(config, 1, "pednav run", recordings=[rec])
@@ -121,16 +131,29 @@ def resolve_policy(name: str) -> RealFilterSetup | str:
 
     if name in SETUP_NAMES:
         return named_setup(name)
+    if split_name(name)[0] == "oracle":
+        raise ValueError(ORACLE_ON_RECORDINGS)
     path = Path(name)
     if path.suffix.lower() == ".json":
         return load_setup(path)
     if split_name(name)[0] in BUILTIN_POLICIES or path.suffix == ".zip" or path.is_dir():
         return name
+    others = [n for n in dict.fromkeys(SETUP_NAMES + BUILTIN_POLICIES) if n != DEFAULT_POLICY]
     raise ValueError(
         f"unknown policy {name!r}: use {DEFAULT_POLICY} (the default), "
-        f"{', '.join(n for n in SETUP_NAMES + BUILTIN_POLICIES if n != DEFAULT_POLICY)}, "
+        f"{', '.join(n for n in others if n != 'oracle')}, "
         "a setup JSON file, or a path to a run directory or saved SB3 model (.zip)"
     )
+
+
+def check_policy(name: str) -> None:
+    """``ValueError`` when ``name`` cannot run on a recording — unknown, the
+    privileged oracle, a tuner that is not shipped — so that a long run can
+    refuse it before it starts."""
+    from gymnasium import spaces
+
+    if isinstance(resolve_policy(name), str):
+        _load_policy(name, spaces.Box(-1.0, 1.0, (4,), np.float32))
 
 
 def check_output_path(path: str | Path, option: str) -> Path:

@@ -8,7 +8,14 @@ at the footfalls only) and puts the footprint errors beside those of PyShoe's
 LSTM tracks stored in the same files (``pyshoeTrajectory``), computed with the
 same metric (:func:`pednav_env.replay.metrics.footprint_errors`: origin at the
 first footprint, one best rotation about the vertical). Prints a Markdown
-table; ``--json`` writes every number. DIR defaults to ../shared/data.
+table and each policy's mean and median (over the walks) of the mean footprint
+error; ``--json`` writes every number (those under ``summary``). DIR defaults to
+../shared/data.
+
+Policies as in ``benchmarks/real_data_table.py`` (``real-fixed``, ``paper``,
+``tuned`` = the shoe family's CMA-ES constant, ``tuned:paper``, ``adaptive``,
+``pretrained``, a run directory or a setup JSON); the privileged ``oracle`` is
+not applicable on recordings and is refused before anything runs.
 """
 
 from __future__ import annotations
@@ -20,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.run_recording import run_with_policy, summarize
+from agents.run_recording import check_policy, run_with_policy, summarize
 from pednav_env.io import load_recording
 from pednav_env.io.matfile import read_mat
 from pednav_env.replay.metrics import footprint_errors
@@ -69,6 +76,7 @@ def main() -> None:
     ap.add_argument("--policies", nargs="+", default=["paper", "real-fixed"])
     ap.add_argument("--json", default=None, help="write all numbers to this file")
     args = ap.parse_args()
+    check_policies(args.policies)
     paths = sorted((Path(args.shared) / "hallway-gcp-dev").glob("*_LLIO.mat"))
     if not paths:
         raise SystemExit(f"no *_LLIO.mat in {Path(args.shared) / 'hallway-gcp-dev'}")
@@ -85,10 +93,36 @@ def main() -> None:
             row[pol]["diverged"] = bool(run.diverged[0])
         out["walks"].append(row)
         print(row["walk"], {p: round(row[p][ERROR_KEYS[0]], 3) for p in args.policies}, flush=True)
+    out["summary"] = footprint_summary(out["walks"], args.policies)
     out["seconds"] = round(time.time() - t0, 1)
     print(markdown(out))
+    print()
+    for key, m in out["summary"].items():
+        print(
+            f"{key}: mean footprint error over the walks {m['mean_m']:.2f} m, "
+            f"median {m['median_m']:.2f} m"
+        )
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=1) + "\n")
+
+
+def check_policies(names: list[str]) -> None:
+    """Every name runs on a recording (else one line and exit, before any run)."""
+    for name in names:
+        try:
+            check_policy(name)
+        except ValueError as exc:
+            raise SystemExit(f"--policies {name}: {exc}") from None
+
+
+def footprint_summary(rows: list[dict], policies: list[str]) -> dict[str, dict[str, float]]:
+    """Per policy (and PyShoe's LSTM): mean and median over the walks of the mean
+    footprint error (m)."""
+    out = {}
+    for key in ["pyshoe_lstm", *policies]:
+        errors = [r[key][ERROR_KEYS[0]] for r in rows]
+        out[key] = {"mean_m": float(np.mean(errors)), "median_m": float(np.median(errors))}
+    return out
 
 
 def _cell(m: dict) -> str:

@@ -5,7 +5,16 @@
 Runs every policy on the PyShoe development trials (errors against the
 VICON reference, PyShoe's metric beside PyShoe's own per-trial-optimised
 figures) and on the two x-io loops (loop closure), and prints Markdown
-tables and a JSON dump (``--json FILE``). DIR defaults to ../shared/data.
+tables, each policy's ratio of its mean PyShoe ARMSE to the mean of PyShoe's
+per-trial-optimised SHOE errors, and a JSON dump (``--json FILE``, the ratios
+under ``ratio_to_pyshoe_shoe``). DIR defaults to ../shared/data.
+
+Policies (:mod:`agents.run_recording`, as ``pednav run --policy``): the fixed
+setups ``paper`` and ``real-fixed``; ``tuned`` (the shoe family's CMA-ES
+constant), ``tuned:paper`` (the paper family's), ``adaptive``, ``pretrained``
+(``NAME:FAMILY`` for the other family), a run directory or a setup JSON. The
+privileged ``oracle`` is not applicable on recordings (it plays the simulator's
+true context) and is refused, as is an unknown name, before anything runs.
 """
 
 from __future__ import annotations
@@ -17,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.run_recording import run_with_policy, summarize
+from agents.run_recording import check_policy, run_with_policy, summarize
 from pednav_env.io import find_recordings, load_recording
 from pednav_env.replay.metrics import pyshoe_armse_as_published, track_errors
 from pednav_env.replay.runner import prepare, run_prepared
@@ -33,12 +42,29 @@ def run_policy(rec, policy: str):
     return run_with_policy(rec, policy)[0]
 
 
+def check_policies(names: list[str]) -> None:
+    """Every name runs on a recording (else one line and exit, before any run)."""
+    for name in names:
+        try:
+            check_policy(name)
+        except ValueError as exc:
+            raise SystemExit(f"--policies {name}: {exc}") from None
+
+
+def pyshoe_ratios(rows: list[dict], policies: list[str]) -> dict[str, float]:
+    """Per policy: mean PyShoe ARMSE over the trials / mean of PyShoe's
+    per-trial-optimised SHOE errors (the issue's "× PyShoe" figure)."""
+    shoe = float(np.mean([r["pyshoe"]["shoe"] for r in rows]))
+    return {p: float(np.mean([r[p]["armse_pyshoe_m"] for r in rows])) / shoe for p in policies}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--shared", default=str(ROOT.parent / "shared" / "data"))
     ap.add_argument("--policies", nargs="+", default=["paper", "real-fixed", "adaptive", "tuned"])
     ap.add_argument("--json", default=None, help="write all numbers to this file")
     args = ap.parse_args()
+    check_policies(args.policies)
     shared = Path(args.shared)
     out: dict = {"pyshoe": [], "xio": [], "policies": args.policies}
     t0 = time.time()
@@ -72,6 +98,7 @@ def main() -> None:
             row[pol] = summarize(rec, run_policy(rec, pol))
         out["xio"].append(row)
         print(name, {p: round(row[p]["loop_closure_m"], 3) for p in args.policies}, flush=True)
+    out["ratio_to_pyshoe_shoe"] = pyshoe_ratios(out["pyshoe"], args.policies)
     out["seconds"] = round(time.time() - t0, 1)
     print(markdown(out))
     if args.json:
@@ -107,6 +134,13 @@ def markdown(out: dict) -> str:
     if "real-fixed" in pols:
         mean.append(f"**{np.mean([r['real-fixed']['armse_m'] for r in rows]):.3f}**")
     lines.append("| " + " | ".join(mean) + " |")
+    lines.append("")
+    shoe = np.mean([r["pyshoe"]["shoe"] for r in rows])
+    ratios = out.get("ratio_to_pyshoe_shoe") or pyshoe_ratios(rows, pols)
+    lines.append(
+        f"Mean PyShoe ARMSE / PyShoe's per-trial-optimised SHOE ({shoe:.4f} m): "
+        + ", ".join(f"{p} {ratios[p]:.2f}×" for p in pols)
+    )
     lines.append("")
     lines.append("| walk | xio published | " + " | ".join(pols) + " |")
     lines.append("|" + "---|" * (2 + len(pols)))

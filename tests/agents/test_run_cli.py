@@ -66,6 +66,16 @@ def test_unknown_policy_lists_real_fixed(capsys):
     assert "real-fixed" in err and "paper" in err
 
 
+def test_the_privileged_oracle_is_refused_on_recordings(capsys):
+    """The oracle reads the simulator's true context: not on a recording, in one line,
+    for one file and a folder, with or without a family suffix."""
+    for argv in (
+        ["run", str(PYSHOE), "--policy", "oracle"],
+        ["run", str(DATA / "replay"), "--policy", "oracle:shoe"],
+    ):
+        one_line_error(capsys, argv, "oracle: not applicable on recordings")
+
+
 def test_short_csv_is_a_clear_error(capsys, tmp_path):
     p = tmp_path / "short.csv"
     p.write_text("\n".join(XIO.read_text().splitlines()[:51]) + "\n")  # 50 rows, 0.13 s
