@@ -83,8 +83,8 @@ def add_env_options(p: argparse.ArgumentParser) -> None:
         metavar="DIR",
         default=None,
         help="for pednav/FootZuptReplay-v0: the folder of recordings with a truth track "
-        "(its data_dir); evaluate plays them in name order, the episode of seed S+k "
-        "recording k (mod their number), so every policy plays each once",
+        "(its data_dir); evaluate plays them in name order (seed S+k: recording k, mod "
+        "their number), so every policy plays each once; tune draws them at random",
     )
     p.add_argument(
         "--env-kwarg",
