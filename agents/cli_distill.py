@@ -11,7 +11,12 @@ from agents.cli_types import positive_int
 
 def run_distill(args: argparse.Namespace) -> int:
     from agents.distill import distill
+    from agents.policies import FAMILY_ENVS
+    from pednav_env.envs.foot_filters import LEARNED_FAMILY
 
+    family = (args.filter or LEARNED_FAMILY) if args.env_id in FAMILY_ENVS else None
+    if args.filter is not None and family is None:
+        raise ValueError(f"--filter: {args.env_id} has no filter families")
     base = Path(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/distill")
     for seed in args.seeds:
         run_dir = base / f"seed{seed}" if len(args.seeds) > 1 else base
@@ -22,6 +27,7 @@ def run_distill(args: argparse.Namespace) -> int:
             lanes=args.lanes,
             iterations=args.iterations,
             steps_per_iteration=args.steps,
+            filter_family=family,
             on_iteration=lambda i, loss: print(
                 f"iteration {i}: loss {loss:.4f}", file=sys.stderr, flush=True
             ),
@@ -40,7 +46,15 @@ def add_distill_command(sub: argparse._SubParsersAction) -> None:
         "oracle's action along its own rollouts on training episodes. Writes a run directory "
         "(model.zip, vecnormalize.pkl, meta.json) for `pednav evaluate --policy RUN_DIR`.",
     )
-    di.add_argument("env_id", help="pednav/WaistStep-v0 or pednav/MarkerTrack-v0")
+    di.add_argument(
+        "env_id", help="pednav/WaistStep-v0, pednav/MarkerTrack-v0 or pednav/FootZupt-v0"
+    )
+    di.add_argument(
+        "--filter",
+        choices=("paper", "shoe"),
+        default=None,
+        help="foot envs: the filter family (default shoe; its oracle table teaches)",
+    )
     di.add_argument(
         "--seeds", type=int, nargs="+", default=[0], help="training run seeds (one run each)"
     )

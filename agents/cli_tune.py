@@ -37,8 +37,8 @@ def run_tune(args: argparse.Namespace) -> int:
 
     env_kwargs = env_kwargs_from_args(args)
     check_env_kwargs(args.env_id, env_kwargs)
-    if args.per_context and env_kwargs:
-        raise ValueError("--per-context sets the env's config itself: no env options with it")
+    if args.per_context and set(env_kwargs) - {"filter"}:
+        raise ValueError("--per-context sets the env's config itself: no env options but --filter")
     family = None
     if args.env_id in FAMILY_ENVS:
         family = env_kwargs.setdefault("filter", LEARNED_FAMILY)
@@ -56,19 +56,25 @@ def run_tune(args: argparse.Namespace) -> int:
         "reevaluate_episodes": args.reevaluate,
     }
     if args.per_context:
-        split = oracle.context_split(args.env_id)
+        split = oracle.context_split(args.env_id, family)
         shipped = read_results(RESULTS_FILE) if RESULTS_FILE.exists() else {}
-        if args.env_id in shipped:  # refine the shipped CMA-ES constant per context
-            options["x0"] = shipped[args.env_id]["action"]
+        if key in shipped:  # refine the shipped CMA-ES constant per context
+            options["x0"] = shipped[key]["action"]
             options["sigma0"] = args.sigma0
-        total = (args.generations + 1) * len(split.labels)
+        total = (args.generations + 1) * len(split.searched)
         with progress_bar("CMA-ES generations", total, wanted(False)) as advance:
             entry = oracle.search_per_context(
-                args.env_id, action_dim, search, on_generation=advance, **options
+                args.env_id,
+                action_dim,
+                search,
+                filter_family=family,
+                unsearched_action=options.get("x0"),
+                on_generation=advance,
+                **options,
             )
-        written = [oracle.save_table_entry(args.env_id, entry, run_dir / oracle.RESULT_NAME)]
+        written = [oracle.save_table_entry(key, entry, run_dir / oracle.RESULT_NAME)]
         if args.install:
-            written.append(oracle.save_table_entry(args.env_id, entry, oracle.RESULTS_FILE))
+            written.append(oracle.save_table_entry(key, entry, oracle.RESULTS_FILE))
         print(json.dumps(entry, indent=2))
         for path in written:
             print(f"wrote {path}", file=sys.stderr)
@@ -131,7 +137,7 @@ def add_tune_command(sub: argparse._SubParsersAction) -> None:
     tu.add_argument(
         "--per-context",
         action="store_true",
-        help="one search per episode context (sensor grade, UWB condition), each started "
+        help="one search per context (sensor grade, UWB condition, foot speed band), each started "
         "from the shipped CMA-ES constant: the privileged oracle's table, written as "
         "RUN_DIR/oracle_actions.json",
     )

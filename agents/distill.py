@@ -129,9 +129,12 @@ def run_distillation(
     teacher: OraclePolicy | None = None,
     env_kwargs: dict[str, Any] | None = None,
     on_iteration: Callable[[int, float], None] | None = None,
+    filter_family: str | None = None,
 ) -> Path:
     """Train a student by DAgger from ``teacher`` (the shipped oracle by default);
-    write the run directory and return it. ``on_iteration(i, loss)`` after each fit."""
+    write the run directory and return it. ``on_iteration(i, loss)`` after each fit.
+    ``filter_family`` (foot envs): the family the episodes run (the env's ``filter``
+    argument), whose oracle table teaches and which ``meta.json`` records."""
     import torch
 
     for name, value in (
@@ -148,14 +151,17 @@ def run_distillation(
     start_time = time.perf_counter()
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
+    env_kwargs = dict(env_kwargs or {})
+    if filter_family is not None:
+        env_kwargs["filter"] = filter_family
     venv = gym.make_vec(
-        env_id, num_envs=lanes, vectorization_mode="vector_entry_point", **(env_kwargs or {})
+        env_id, num_envs=lanes, vectorization_mode="vector_entry_point", **env_kwargs
     )
     vec = NativeVecEnv(venv, split="training")
     vec.seed(seed)
     space = vec.action_space
     if teacher is None:
-        teacher = OraclePolicy.for_env(env_id, space)
+        teacher = OraclePolicy.for_env(env_id, space, filter_family)
     obs_dim = int(vec.observation_space.shape[0])
     action_dim = int(space.shape[0])
     model, norm = _student(feature_dim(obs_dim, HISTORY, action_dim), space, seed, list(net_arch))
@@ -215,7 +221,9 @@ def run_distillation(
         "episodes_finished": episodes,
         "loss_per_iteration": losses,
         "training_seconds": round(time.perf_counter() - start_time, 1),
-        "env_kwargs": {k: repr(v) for k, v in (env_kwargs or {}).items()},
+        "env_kwargs": {k: repr(v) for k, v in env_kwargs.items()},
     }
+    if filter_family is not None:
+        meta["filter"] = filter_family
     (run_dir / "meta.json").write_text(json.dumps(meta, indent=2) + "\n")
     return run_dir

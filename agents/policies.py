@@ -2,9 +2,10 @@
 
 Names: ``paper`` (action 0), ``tuned`` (the shipped best constant action),
 ``adaptive`` (the innovation-based rule), ``pretrained`` (the shipped tuner
-under ``agents/pretrained/``), ``oracle`` (WaistStep, MarkerTrack; privileged: the
-constant tuned for the episode's true context, :mod:`baselines.oracle`; a target,
-not a baseline), and for the foot envs ``real-fixed`` (action 0 of the shoe filter
+under ``agents/pretrained/``), ``oracle`` (privileged: the constant tuned for the
+true context, the episode's on WaistStep and MarkerTrack, the interval's speed
+band on FootZupt's shoe family; :mod:`baselines.oracle`; a target, not a
+baseline), and for the foot envs ``real-fixed`` (action 0 of the shoe filter
 family).
 
 Filter families (foot envs, :mod:`pednav_env.envs.foot_filters`): every policy
@@ -195,7 +196,7 @@ def load_policy(
     if name == "adaptive":
         return InnovationAdaptivePolicy(action_space, env_id, learned)
     if name == "oracle":
-        return OraclePolicy.for_env(env_id, action_space)
+        return OraclePolicy.for_env(env_id, action_space, learned)
     if name == "pretrained":
         path = pretrained_dir(env_id, learned)
         if not (path / "model.zip").exists():

@@ -29,7 +29,7 @@ SHORT = {
 LABEL_KEY = {"pednav/WaistStep-v0": "sensor_grade", "pednav/MarkerTrack-v0": "uwb_condition"}
 
 
-@pytest.mark.parametrize("env_id", sorted(CONTEXTS))
+@pytest.mark.parametrize("env_id", sorted(SHORT))
 def test_context_index_names_the_episode_condition(env_id):
     """The context's index field points at the grade / condition the info names,
     in the vector env (reset and after an autoreset) and the scalar env alike."""
@@ -134,16 +134,20 @@ def test_shipped_oracle_table_covers_the_env_contexts():
     if not RESULTS_FILE.exists():
         pytest.skip("no oracle table shipped")
     table = read_table(RESULTS_FILE)
-    for env_id, entry in table.items():
-        assert tuple(entry["labels"]) == CONTEXTS[env_id].labels
-        space = gym.make(env_id).action_space
-        OraclePolicy.for_env(env_id, space)
+    for key, entry in table.items():
+        assert tuple(entry["labels"]) == CONTEXTS[key].labels
+        env_id, _, family = key.partition(":")
+        family = family or None
+        space = gym.make(env_id, **({"filter": family} if family else {})).action_space
+        assert OraclePolicy.for_env(env_id, space, family).filter_family == family
 
 
 def test_evaluate_labels_and_plays_the_oracle(monkeypatch):
     env_id = "pednav/MarkerTrack-v0"
     monkeypatch.setattr(
-        oracle_module.OraclePolicy, "for_env", classmethod(lambda cls, e, s: _oracle(env_id))
+        oracle_module.OraclePolicy,
+        "for_env",
+        classmethod(lambda cls, e, s, f=None: _oracle(env_id)),
     )
     result = evaluate(env_id, ["oracle"], 3, 20000, SHORT[env_id])
     assert result["policies"][0]["name"] == "oracle"
