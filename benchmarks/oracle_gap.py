@@ -7,8 +7,11 @@ RESULT.json is the output of ``pednav evaluate ENV --policy paper tuned oracle .
 replayed. Per policy: mean error, divergence rate, the paired difference against
 ``tuned`` and against ``oracle`` (paired t-test and Wilcoxon signed-rank), the share
 of episodes it beats tuned, and the share of the gap it closes,
-(tuned − policy) / (tuned − oracle). Run directories named ``.../seedN`` are also
-summarised together (mean and spread over training seeds).
+(tuned − policy) / (tuned − oracle), undefined (—) unless the oracle beats tuned
+(paired t-test, p < 0.05). Run directories named ``.../seedN`` are also
+summarised together (mean and spread over training seeds). Works for every env
+with an oracle (for FootZupt the policies of the shoe family: ``real-fixed``,
+``tuned``, ``oracle``).
 """
 
 from __future__ import annotations
@@ -47,11 +50,14 @@ def main() -> None:
     tuned, oracle = err["tuned"], err.get("oracle")
     oracle_mean = float(oracle.mean()) if oracle is not None else float("nan")
     gap = float(tuned.mean()) - oracle_mean
+    _, p_gap, _ = paired(oracle, tuned) if oracle is not None else (0.0, 1.0, 1.0)
     print(
         f"{result['env']}: {result['episodes']} episodes from seed {result['seed']}; "
         f"tuned {tuned.mean():.4f}, oracle {oracle_mean:.4f}, "
-        f"ceiling {100 * gap / tuned.mean():.1f} % of tuned"
+        f"ceiling {100 * gap / tuned.mean():.1f} % of tuned (paired t p = {p_gap:.2g})"
     )
+    if not (gap > 0 and p_gap < 0.05):
+        gap = float("nan")  # no gap to close
     head = (
         "| policy | mean (m) | diverged | Δ vs tuned (m) | p t | p Wilcoxon | better than tuned "
         "| Δ vs oracle (m) | p t | gap closed |"
@@ -63,8 +69,8 @@ def main() -> None:
     for name, e in err.items():
         dt, pt, wt = paired(e, tuned)
         do, po, _ = paired(e, oracle) if oracle is not None else (float("nan"),) * 3
-        # undefined when the oracle is no better than tuned (no gap to close)
-        closed = (tuned.mean() - e.mean()) / gap if gap > 0 else float("nan")
+        # undefined when the oracle is not shown better than tuned (no gap to close)
+        closed = (tuned.mean() - e.mean()) / gap
         if re.search(r"seed\d+$", name):
             closed_by_seed.append((name, e.mean(), closed, dt, pt))
         row = [
