@@ -100,3 +100,71 @@ def stance_logic(
     run = run + 1 if condition else 0
     now = run >= min_run
     return run, now, now and not in_stance, in_stance and not now
+
+
+@njit(cache=True)
+def shoe_statistic_lanes(
+    omega_b: np.ndarray,
+    f_b: np.ndarray,
+    first: np.ndarray,
+    k: int,
+    windows: np.ndarray,
+    two_g: float,
+    g2: float,
+    accel_var: float,
+    gyro_var: float,
+    out: np.ndarray,
+) -> None:
+    """``out`` (N, k) ← the SHOE statistic (Skog et al. 2010 eq 11) of lane i at
+    samples first_i … first_i + k − 1 of records ``omega_b``, ``f_b`` (N, T, 3)
+    over causal windows of ``windows[i]`` samples (fewer at the start), with
+    2g = ``two_g``, g² = ``g2``, σ_a² = ``accel_var``, σ_ω² = ``gyro_var``: the
+    arithmetic of the batched numpy version
+    (:func:`pednav_env.testing.detectors.shoe_statistic_at_numpy`) in its order,
+    bit for bit: prefix sums from sample first_i − (max W − 1) (zeros
+    before the record), window sums as differences of prefix sums, divided by
+    the window's sample count; T = (Σ|f|²/W − 2g u·f̄ + g²)/σ_a² + (Σ|ω|²/W)/σ_ω²
+    with u = f̄/max(|f̄|, 1e-12)."""
+    n = omega_b.shape[0]
+    back = 0
+    for i in range(n):
+        back = max(back, windows[i] - 1)
+    span = back + k
+    cf = np.empty((span + 1, 3))
+    cf2 = np.empty(span + 1)
+    cw2 = np.empty(span + 1)
+    for i in range(n):
+        fi, w = first[i], windows[i]
+        cf[0, 0] = cf[0, 1] = cf[0, 2] = 0.0
+        cf2[0] = cw2[0] = 0.0
+        for t in range(span):
+            idx = fi - back + t
+            if idx >= 0:
+                fx, fy, fz = f_b[i, idx, 0], f_b[i, idx, 1], f_b[i, idx, 2]
+                wx, wy, wz = omega_b[i, idx, 0], omega_b[i, idx, 1], omega_b[i, idx, 2]
+            else:
+                fx = fy = fz = wx = wy = wz = 0.0
+            f2 = fx * fx + fy * fy + fz * fz
+            w2 = wx * wx + wy * wy + wz * wz
+            if t == 0:  # numpy's cumsum starts at the first term, not at 0 + it
+                cf[1, 0], cf[1, 1], cf[1, 2], cf2[1], cw2[1] = fx, fy, fz, f2, w2
+            else:
+                cf[t + 1, 0] = cf[t, 0] + fx
+                cf[t + 1, 1] = cf[t, 1] + fy
+                cf[t + 1, 2] = cf[t, 2] + fz
+                cf2[t + 1] = cf2[t] + f2
+                cw2[t + 1] = cw2[t] + w2
+        for j in range(k):
+            hi = back + 1 + j
+            lo = hi - w
+            count = float(min(w, fi + j + 1))
+            mx = (cf[hi, 0] - cf[lo, 0]) / count
+            my = (cf[hi, 1] - cf[lo, 1]) / count
+            mz = (cf[hi, 2] - cf[lo, 2]) / count
+            norm = math.sqrt(mx * mx + my * my + mz * mz)
+            den = norm if (norm != norm or norm > 1e-12) else 1e-12  # np.maximum keeps NaN
+            cross = (mx / den) * mx + (my / den) * my + (mz / den) * mz
+            sum_f2 = (cf2[hi] - cf2[lo]) / count
+            acc_term = sum_f2 - two_g * cross + g2
+            gyro_term = (cw2[hi] - cw2[lo]) / count
+            out[i, j] = acc_term / accel_var + gyro_term / gyro_var

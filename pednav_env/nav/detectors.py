@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.constants import STANDARD_GRAVITY
+from pednav_env.nav.detector_kernel import shoe_statistic_lanes
 
 Array = NDArray[np.float64]
 
@@ -184,24 +185,17 @@ def shoe_statistic_at(
     windows = np.asarray(windows, dtype=np.int64)
     if first.shape != (n,) or windows.shape != (n,) or windows.min(initial=1) < 1:
         raise ValueError(f"first and windows must be ({n},) with windows ≥ 1")
-    back = int(windows.max(initial=1)) - 1
-    # samples first − back … first + k − 1 of each lane (index < 0: outside the record)
-    idx = first[:, None] + np.arange(-back, k)[None, :]
-    inside = idx >= 0
-    rows = np.arange(n)[:, None]
-    f = np.where(inside[..., None], f_b[rows, np.maximum(idx, 0)], 0.0)
-    w = np.where(inside[..., None], omega_b[rows, np.maximum(idx, 0)], 0.0)
-    zero = np.zeros((n, 1))
-    c_f = np.concatenate((np.zeros((n, 1, 3)), np.cumsum(f, axis=1)), axis=1)
-    c_f2 = np.concatenate((zero, np.cumsum(np.sum(f * f, axis=-1), axis=1)), axis=1)
-    c_w2 = np.concatenate((zero, np.cumsum(np.sum(w * w, axis=-1), axis=1)), axis=1)
-    hi = back + 1 + np.arange(k)[None, :]  # prefix index just after sample m
-    lo = hi - windows[:, None]
-    count = np.minimum(windows[:, None], first[:, None] + np.arange(k)[None, :] + 1)
-    f_mean = (c_f[rows, hi] - c_f[rows, lo]) / count[..., None]
-    u = f_mean / np.maximum(np.linalg.norm(f_mean, axis=-1, keepdims=True), 1e-12)
-    sum_f2 = (c_f2[rows, hi] - c_f2[rows, lo]) / count
-    cross = np.sum(u * f_mean, axis=-1)
-    acc_term = sum_f2 - 2 * config.g * cross + config.g**2
-    gyro_term = (c_w2[rows, hi] - c_w2[rows, lo]) / count
-    return acc_term / config.accel_noise_std**2 + gyro_term / config.gyro_noise_std**2
+    out = np.empty((n, k))
+    shoe_statistic_lanes(
+        np.ascontiguousarray(omega_b, dtype=float),
+        np.ascontiguousarray(f_b, dtype=float),
+        first,
+        k,
+        windows,
+        float(2 * config.g),
+        float(config.g**2),
+        float(config.accel_noise_std**2),
+        float(config.gyro_noise_std**2),
+        out,
+    )
+    return out

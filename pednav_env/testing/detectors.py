@@ -8,7 +8,10 @@ the filterpy reference of ``pednav bench foot``:
 - :func:`threshold_condition` and :func:`apply_min_duration` on whole records
   (offline);
 - :class:`OnlineStanceDetector`, one sample of N walkers at a time (causal
-  window means of eq 5, minimum stance duration, start and end events).
+  window means of eq 5, minimum stance duration, start and end events);
+- :func:`shoe_statistic_at_numpy`, the SHOE statistic of lanes with their own
+  windows in batched numpy (the oracle of the compiled
+  :func:`pednav_env.nav.detectors.shoe_statistic_at`, which replaced it).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from numpy.typing import NDArray
 
 from pednav_env.nav.detectors import (
     DetectorConfig,
+    ShoeDetectorConfig,
     ThresholdDetectorConfig,
     causal_moving_mean,
     detector_window,
@@ -110,3 +114,41 @@ class OnlineStanceDetector:
         start, end = now & ~self.in_stance, self.in_stance & ~now
         self.in_stance = now
         return start, end
+
+
+def shoe_statistic_at_numpy(
+    omega_b: Array,
+    f_b: Array,
+    first: NDArray[np.integer],
+    k: int,
+    windows: NDArray[np.integer],
+    config: ShoeDetectorConfig,
+) -> Array:
+    """SHOE statistic ``(N, k)`` (Skog 2010, eq 11) at samples first_i … first_i + k − 1
+    of records ``(N, T, 3)``, lane i over a causal window of ``windows[i]`` samples:
+    cumulative sums over the samples the windows reach, in numpy (the former
+    :func:`pednav_env.nav.detectors.shoe_statistic_at`, kept as its oracle)."""
+    n = omega_b.shape[0]
+    first = np.asarray(first, dtype=np.int64)
+    windows = np.asarray(windows, dtype=np.int64)
+    back = int(windows.max(initial=1)) - 1
+    # samples first − back … first + k − 1 of each lane (index < 0: outside the record)
+    idx = first[:, None] + np.arange(-back, k)[None, :]
+    inside = idx >= 0
+    rows = np.arange(n)[:, None]
+    f = np.where(inside[..., None], f_b[rows, np.maximum(idx, 0)], 0.0)
+    w = np.where(inside[..., None], omega_b[rows, np.maximum(idx, 0)], 0.0)
+    zero = np.zeros((n, 1))
+    c_f = np.concatenate((np.zeros((n, 1, 3)), np.cumsum(f, axis=1)), axis=1)
+    c_f2 = np.concatenate((zero, np.cumsum(np.sum(f * f, axis=-1), axis=1)), axis=1)
+    c_w2 = np.concatenate((zero, np.cumsum(np.sum(w * w, axis=-1), axis=1)), axis=1)
+    hi = back + 1 + np.arange(k)[None, :]  # prefix index just after sample m
+    lo = hi - windows[:, None]
+    count = np.minimum(windows[:, None], first[:, None] + np.arange(k)[None, :] + 1)
+    f_mean = (c_f[rows, hi] - c_f[rows, lo]) / count[..., None]
+    u = f_mean / np.maximum(np.linalg.norm(f_mean, axis=-1, keepdims=True), 1e-12)
+    sum_f2 = (c_f2[rows, hi] - c_f2[rows, lo]) / count
+    cross = np.sum(u * f_mean, axis=-1)
+    acc_term = sum_f2 - 2 * config.g * cross + config.g**2
+    gyro_term = (c_w2[rows, hi] - c_w2[rows, lo]) / count
+    return acc_term / config.accel_noise_std**2 + gyro_term / config.gyro_noise_std**2
