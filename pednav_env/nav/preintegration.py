@@ -19,7 +19,10 @@ kernel accumulates them once per sample (:func:`strapdown_increment`,
 A walker's sigma points are a :class:`SigmaPoints` (attitude matrices,
 velocities, positions), its preintegrals a :class:`Preintegral`. Helpers
 called at every sample are inlined by numba (``inline="always"``): a compiled
-call per sample costs more than the sample's arithmetic.
+call per sample costs more than the sample's arithmetic. Loops index whole
+arrays (``C[s, r, c]``) instead of taking a view per point (``C[s]``): every
+view of an array costs numba two atomic reference-count updates, which in a
+loop over points cost as much as the arithmetic (docs/PERFORMANCE.md).
 """
 
 from __future__ import annotations
@@ -54,10 +57,12 @@ class Preintegral(NamedTuple):
 @njit(cache=True)
 def restart(pre: Preintegral) -> None:
     """D = I, A = B = 0: the preintegrals of an empty interval."""
-    pre.D[:] = 0.0
-    pre.D[0, 0] = pre.D[1, 1] = pre.D[2, 2] = 1.0
-    pre.A[:] = 0.0
-    pre.B[:] = 0.0
+    D, A, B = pre
+    for r in range(3):
+        for c in range(3):
+            D[r, c] = 1.0 if r == c else 0.0
+        A[r] = 0.0
+        B[r] = 0.0
 
 
 @njit(cache=True, inline="always")
@@ -120,12 +125,14 @@ def accumulate(pre: Preintegral, F: np.ndarray, dC: np.ndarray, dt: float) -> No
 
 
 @njit(cache=True, inline="always")
-def _row_times(C: np.ndarray, r: int, D: np.ndarray, out: np.ndarray) -> tuple[float, float, float]:
-    """Row r of C D into row r of ``out`` (which may be C itself); returns row r of
-    C as it was."""
-    c0, c1, c2 = C[r, 0], C[r, 1], C[r, 2]
+def _row_times(
+    C: np.ndarray, s: int, r: int, D: np.ndarray, out: np.ndarray
+) -> tuple[float, float, float]:
+    """Row r of C_s D into row r of ``out[s]`` (``C``, ``out`` (S, 3, 3); ``out`` may
+    be C itself); returns row r of C_s as it was."""
+    c0, c1, c2 = C[s, r, 0], C[s, r, 1], C[s, r, 2]
     for c in range(3):
-        out[r, c] = c0 * D[0, c] + c1 * D[1, c] + c2 * D[2, c]
+        out[s, r, c] = c0 * D[0, c] + c1 * D[1, c] + c2 * D[2, c]
     return c0, c1, c2
 
 
@@ -140,15 +147,16 @@ def moved_states(
     D, A, B = pre.D, pre.A, pre.B
     for s in range(chi.shape[0]):
         for r in range(3):
-            c0, c1, c2 = _row_times(C[s], r, D, C_moved[s])
+            c0, c1, c2 = _row_times(C, s, r, D, C_moved)
             ca = c0 * A[0] + c1 * A[1] + c2 * A[2]
             cb = c0 * B[0] + c1 * B[1] + c2 * B[2]
             chi[s, r] = p[s, r] + v[s, r] * tau + cb
             chi[s, 3 + r] = v[s, r] + ca
         chi[s, 2] -= 0.5 * g * (tau * tau)
         chi[s, 5] -= g * tau
-        Cs = C_moved[s]
-        yaw, pitch, roll = _dcm_euler_angles(Cs[0, 0], Cs[1, 0], Cs[2, 0], Cs[2, 1], Cs[2, 2])
+        yaw, pitch, roll = _dcm_euler_angles(
+            C_moved[s, 0, 0], C_moved[s, 1, 0], C_moved[s, 2, 0], C_moved[s, 2, 1], C_moved[s, 2, 2]
+        )
         chi[s, 6] = pitch
         chi[s, 7] = roll
         chi[s, 8] = yaw
@@ -162,7 +170,7 @@ def move_sigmas(sig: SigmaPoints, pre: Preintegral, tau: float, g: float) -> Non
     D, A, B = pre.D, pre.A, pre.B
     for s in range(C.shape[0]):
         for r in range(3):
-            c0, c1, c2 = _row_times(C[s], r, D, C[s])
+            c0, c1, c2 = _row_times(C, s, r, D, C)
             p[s, r] += v[s, r] * tau + c0 * B[0] + c1 * B[1] + c2 * B[2]
             v[s, r] += c0 * A[0] + c1 * A[1] + c2 * A[2]
         p[s, 2] -= 0.5 * g * (tau * tau)
@@ -190,16 +198,16 @@ def central_point_diverges(
         p_out[r] = p[0, r] + v[0, r] * tau + c0 * B[0] + c1 * B[1] + c2 * B[2]
     v_out[2] -= g * tau
     p_out[2] -= 0.5 * g * (tau * tau)
-    return diverging(C[0], v_out, p_out, speed_max)
+    return diverging(C, 0, v_out, p_out, speed_max)
 
 
 @njit(cache=True, inline="always")
-def diverging(C: np.ndarray, v: np.ndarray, p: np.ndarray, speed_max: float) -> bool:
-    """Non-finite attitude ``C`` (3, 3), velocity or position, or a speed above
-    ``speed_max`` (m/s)."""
+def diverging(C: np.ndarray, s: int, v: np.ndarray, p: np.ndarray, speed_max: float) -> bool:
+    """Non-finite attitude ``C[s]`` (``C`` (S, 3, 3)), velocity or position, or a
+    speed above ``speed_max`` (m/s)."""
     for r in range(3):
         for c in range(3):
-            if not math.isfinite(C[r, c]):
+            if not math.isfinite(C[s, r, c]):
                 return True
         if not (math.isfinite(v[r]) and math.isfinite(p[r])):
             return True
@@ -208,11 +216,11 @@ def diverging(C: np.ndarray, v: np.ndarray, p: np.ndarray, speed_max: float) -> 
 
 
 @njit(cache=True)
-def all_finite(C: np.ndarray) -> bool:
-    """All entries of a 3 × 3 matrix finite."""
+def all_finite(C: np.ndarray, s: int) -> bool:
+    """All entries of the 3 × 3 matrix ``C[s]`` finite (``C`` (S, 3, 3))."""
     for r in range(3):
         for c in range(3):
-            if not math.isfinite(C[r, c]):
+            if not math.isfinite(C[s, r, c]):
                 return False
     return True
 
@@ -236,11 +244,14 @@ def weighted_sums(Wm: np.ndarray, sig: SigmaPoints, sums: AnchorSums) -> None:
         sums.v[r] = 0.0
         for c in range(3):
             sums.C[r, c] = 0.0
-        for s in range(Wm.shape[0]):
-            sums.p[r] += Wm[s] * p[s, r]
-            sums.v[r] += Wm[s] * v[s, r]
+    # points outermost: the 15 sums are independent chains (each in the order s = 0, 1, …)
+    for s in range(Wm.shape[0]):
+        w = Wm[s]
+        for r in range(3):
+            sums.p[r] += w * p[s, r]
+            sums.v[r] += w * v[s, r]
             for c in range(3):
-                sums.C[r, c] += Wm[s] * C[s, r, c]
+                sums.C[r, c] += w * C[s, r, c]
 
 
 @njit(cache=True, inline="always")

@@ -76,7 +76,14 @@ from pednav_env.nav.preintegration import (
     strapdown_increment,
     weighted_sums,
 )
-from pednav_env.nav.zupt_algebra import draw_sigmas, prior_moments, state_mean, zupt_update
+from pednav_env.nav.zupt_algebra import (
+    AlgebraScratch,
+    draw_sigmas,
+    new_algebra_scratch,
+    prior_moments,
+    state_mean,
+    zupt_update,
+)
 
 #: Kinds of ZUPT in the update log: stance start, stance end, stance sample.
 KIND_START, KIND_END, KIND_STANCE = 0, 1, 2
@@ -176,6 +183,7 @@ class SampleScratch(NamedTuple):
     """Scratch arrays of the per-sample steps, reused across walkers."""
 
     w: np.ndarray  # (3,) rad/s, bias-corrected rate
+    f_j: np.ndarray  # (3,) m/s², the sample's specific force
     dC: np.ndarray  # (3, 3) C(Δq) of the sample
     f_mid: np.ndarray  # (3,) m/s², specific force in mid-interval axes
     F: np.ndarray  # (3,) m/s², the same in anchor axes
@@ -190,6 +198,7 @@ class SampleScratch(NamedTuple):
 def new_sample_scratch() -> SampleScratch:
     """Scratch arrays for the per-sample steps of :func:`advance_walker`."""
     return SampleScratch(
+        np.empty(3),
         np.empty(3),
         np.empty((3, 3)),
         np.empty(3),
@@ -210,9 +219,7 @@ class ZuptScratch(NamedTuple):
     dev: np.ndarray  # (S, 9) residuals from the mean
     x: np.ndarray  # (9,) prior, then posterior mean
     P: np.ndarray  # (9, 9) prior, then posterior covariance
-    SI: np.ndarray  # (4, 4) S⁻¹
-    KT: np.ndarray  # (4, 9) Kᵀ
-    L: np.ndarray  # (9, 9) Cholesky factor
+    alg: AlgebraScratch  # the update's and the draw's work arrays
     powers: np.ndarray  # (4,) τᵖ · process-noise scale
     R_diag: np.ndarray  # (4,)
 
@@ -226,9 +233,7 @@ def new_zupt_scratch(num_sigmas: int, num_powers: int) -> ZuptScratch:
         np.empty((num_sigmas, 9)),
         np.empty(9),
         np.empty((9, 9)),
-        np.empty((4, 4)),
-        np.empty((4, 9)),
-        np.zeros((9, 9)),
+        new_algebra_scratch(),
         np.empty(num_powers),
         np.empty(4),
     )
@@ -285,14 +290,15 @@ def zupt(
     knobs: WalkerKnobs,
     model: UkfModel,
     filt: WalkerFilters,
+    sig: SigmaPoints,
     log: UpdateLog,
     n_log: int,
     zs: ZuptScratch,
 ) -> tuple[bool, float, int]:
     """ZUPT of walker i at sample j on the moved sigma states ``zs.chi``: prior
     (unscented moments plus Q of the ``interval_s`` since the last draw), update,
-    new sigma points; counters, last posterior and (when logging) the log row
-    ``n_log`` are written. Returns (accepted, NIS, next log row)."""
+    new sigma points ``sig`` (walker i's); counters, last posterior and (when
+    logging) the log row ``n_log`` are written. Returns (accepted, NIS, next log row)."""
     q_scale = knobs.process_noise_scale[i]
     pw = interval_s
     for p in range(zs.powers.shape[0]):
@@ -305,13 +311,14 @@ def zupt(
         log.P[n_log, 0] = zs.P
     zs.R_diag[0] = knobs.zupt_var_height[i]
     zs.R_diag[1] = zs.R_diag[2] = zs.R_diag[3] = knobs.zupt_var_velocity[i]
-    nis, ok = zupt_update(zs.x, zs.P, knobs.height_ref[i], zs.R_diag, s.gate_nis, zs.SI, zs.KT)
+    nis, ok = zupt_update(zs.x, zs.P, knobs.height_ref[i], zs.R_diag, s.gate_nis, zs.alg)
     filt.counters[i, 0 if ok else 1] += 1
     filt.last_nis[i] = nis
-    filt.x[i] = zs.x
-    filt.P[i] = zs.P
-    sig = SigmaPoints(filt.sig_C[i], filt.sig_v[i], filt.sig_p[i])
-    if draw_sigmas(zs.x, zs.P, s.spread, sig, zs.L):
+    for r in range(9):  # element by element: no views (module docstring of preintegration)
+        filt.x[i, r] = zs.x[r]
+        for c in range(9):
+            filt.P[i, r, c] = zs.P[r, c]
+    if draw_sigmas(zs.x, zs.P, s.spread, sig, zs.alg):
         filt.counters[i, 2] += 1
     if logging:
         log.index[n_log, 0] = i
@@ -331,7 +338,7 @@ def new_anchor(Wm: np.ndarray, sig: SigmaPoints, pre: Preintegral, sums: AnchorS
     Returns whether the central attitude is non-finite."""
     restart(pre)
     weighted_sums(Wm, sig, sums)
-    return not all_finite(sig.C[0])
+    return not all_finite(sig.C, 0)
 
 
 # ------------------------------------------------------------------ records
@@ -378,7 +385,7 @@ def advance_walker(
     stance, start, end = out.stance[i], out.start[i], out.end[i]
     positions, states = out.positions, out.states
     record_pos, record_state = positions.shape[0] > 0, states.shape[0] > 0
-    w, dC, f_mid, F, pre, sums = ss.w, ss.dC, ss.f_mid, ss.F, ss.pre, ss.sums
+    w, f_j, dC, f_mid, F, pre, sums = ss.w, ss.f_j, ss.dC, ss.f_mid, ss.F, ss.pre, ss.sums
     v_c, p_c, p_mean = ss.v_c, ss.p_c, ss.p_mean
     count, run, in_stance = det.count[i], det.run[i], det.in_stance[i]
     anchor = 0  # sample of the last sigma-point draw
@@ -392,7 +399,8 @@ def advance_walker(
     for j in range(k):
         for r in range(3):
             w[r] = omega[j, r] - bias[r]
-        strapdown_increment(w, f[j], dt, dC, f_mid)
+            f_j[r] = f[j, r]
+        strapdown_increment(w, f_j, dt, dC, f_mid)
         anchor_force(pre.D, f_mid, F)
         cond, count = detect(shoe_condition, j, w, F, C_central, history, count, thresholds)
         run, now, is_start, is_end = stance_logic(cond, run, in_stance, min_run)
@@ -403,12 +411,14 @@ def advance_walker(
         if event and moving and j < valid and div_at > k:
             tau = (j - anchor) * dt
             moved_states(sig, pre, tau, g, zs.chi, zs.C_moved)
-            if anchor_bad or diverging(zs.C_moved[0], zs.chi[0, 3:6], zs.chi[0, 0:3], s.speed_max):
+            for r in range(3):  # the central point's velocity and position
+                v_c[r], p_c[r] = zs.chi[0, 3 + r], zs.chi[0, r]
+            if anchor_bad or diverging(zs.C_moved, 0, v_c, p_c, s.speed_max):
                 div_at = j
             else:
                 kind = KIND_START if is_start else (KIND_END if is_end else KIND_STANCE)
                 ok, nis, n_log = zupt(
-                    i, j, kind, elapsed0 + tau, s, knobs, model, filt, log, n_log, zs
+                    i, j, kind, elapsed0 + tau, s, knobs, model, filt, sig, log, n_log, zs
                 )
                 if ok:
                     n_acc += 1
@@ -416,7 +426,8 @@ def advance_walker(
                     last_acc = j
                 anchor, elapsed0, first_bad = j, 0.0, k + 1
                 anchor_bad = new_anchor(Wm, sig, pre, sums)
-                F[:] = f_mid  # = D f_mid from the new anchor
+                for r in range(3):
+                    F[r] = f_mid[r]  # = D f_mid from the new anchor
         # integrate sample j: state index t = j + 1
         if moving:
             accumulate(pre, F, dC, dt)
@@ -429,7 +440,8 @@ def advance_walker(
         if record_pos or t == valid:
             mean_position(sums, pre, tau, g, p_mean)
             if record_pos:
-                positions[i, j] = p_mean
+                for r in range(3):
+                    positions[i, j, r] = p_mean[r]
             if t == valid:
                 out.position[i] = p_mean
         if record_state:
@@ -475,25 +487,3 @@ def advance_block(
             i, block, settings, knobs, model, filters, detector, out, log, n_log, ss, zs
         )
     return n_log
-
-
-@njit(cache=True)
-def redraw_sigmas(
-    lanes: np.ndarray,
-    x: np.ndarray,
-    P: np.ndarray,
-    spread: float,
-    sig_C: np.ndarray,
-    sig_v: np.ndarray,
-    sig_p: np.ndarray,
-) -> np.ndarray:
-    """Draw the sigma points ``sig_C``, ``sig_v``, ``sig_p`` (N, S, ·) of walkers
-    ``lanes`` from their (x, P) rows (``x`` (B, 9), ``P`` (B, 9, 9);
-    :func:`pednav_env.nav.zupt_algebra.draw_sigmas`); returns the mask of
-    covariances that had to be repaired."""
-    L = np.zeros((9, 9))
-    bad = np.zeros(lanes.shape[0], dtype=np.bool_)
-    for j in range(lanes.shape[0]):
-        i = lanes[j]
-        bad[j] = draw_sigmas(x[j], P[j], spread, SigmaPoints(sig_C[i], sig_v[i], sig_p[i]), L)
-    return bad

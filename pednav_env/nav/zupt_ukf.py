@@ -54,6 +54,7 @@ from pednav_env.nav.detectors import (
     shoe_statistic,
 )
 from pednav_env.nav.ukf import repair_covariance
+from pednav_env.nav.zupt_algebra import redraw_sigmas
 from pednav_env.nav.zupt_config import UpdateMode, ZuptUkfConfig
 from pednav_env.nav.zupt_kernel import (
     BlockInput,
@@ -67,7 +68,6 @@ from pednav_env.nav.zupt_kernel import (
     new_block_output,
     new_detector_state,
     new_update_log,
-    redraw_sigmas,
 )
 from pednav_env.nav.zupt_model import STATE_DIM, dcm_to_state, process_noise_basis, state_mean
 
