@@ -143,6 +143,17 @@ def main() -> int:
                 result |= scalar_env(env_id, range(100, 102), 40, {"scenario": scen})
             except Exception as exc:  # a scenario name an env does not have
                 result[f"{env_id} {scen}"] = f"error {type(exc).__name__}"
+    # the shoe filter family (SHOE detector, a ZUPT at every stance sample)
+    result |= scalar_env("pednav/FootZupt-v0", range(200, 202), 40, {"filter": "shoe"})
+    result |= scalar_env(
+        "pednav/FootZupt-v0", range(202, 204), 40, {"filter": "shoe", "scenario": "random"}
+    )
+    result |= {
+        f"{k} shoe": v
+        for k, v in vector_env(
+            "pednav/FootZupt-v0", 4, 40, {"filter": "shoe", "scenario": "random"}
+        ).items()
+    }
     replay_kwargs = {
         "data_dir": str(
             Path(__file__).resolve().parents[2] / "shared" / "data" / "pyshoe-vicon-dev"
@@ -150,6 +161,9 @@ def main() -> int:
     }
     try:
         result |= scalar_env("pednav/FootZuptReplay-v0", range(2), 40, replay_kwargs)
+        result |= scalar_env(
+            "pednav/FootZuptReplay-v0", range(2), 40, replay_kwargs | {"filter": "shoe"}
+        )
     except Exception as exc:
         result["replay"] = f"error {type(exc).__name__}: {exc}"[:200]
     result |= evaluations()

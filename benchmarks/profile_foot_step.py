@@ -1,9 +1,10 @@
 """Where a FootZupt vector step spends its time (the split in docs/PERFORMANCE.md).
 
-    .venv/bin/python benchmarks/profile_foot_step.py [N] [STEPS]
+    .venv/bin/python benchmarks/profile_foot_step.py [N] [STEPS] [FAMILY]
 
-Steps the native vector env's core (no autoresets) with the paper policy for
-STEPS vector steps after 3 warm-up steps, and prints CPU time per vector step:
+Steps the native vector env's core (no autoresets) with action 0 of filter family
+FAMILY (default ``paper``; ``shoe`` on the random scenario, as ``pednav bench foot``
+times it) for STEPS vector steps after 3 warm-up steps, and prints CPU time per vector step:
 in total, in the compiled ZUPT-UKF kernel (detector, strapdown preintegrals,
 ZUPT updates and sigma-point redraws of all walkers), in the rest of
 ``ZuptUkf.advance`` (argument packing, divergence freezes) and in the env's
@@ -24,11 +25,13 @@ from typing import Any
 import numpy as np
 
 from pednav_env.envs import foot_core
+from pednav_env.envs.foot_core import FootZuptConfig
 from pednav_env.envs.foot_zupt import FootZuptVectorEnv
 from pednav_env.nav import zupt_ukf
 
 N = int(sys.argv[1]) if len(sys.argv) > 1 else 256
 STEPS = int(sys.argv[2]) if len(sys.argv) > 2 else 30
+FAMILY = sys.argv[3] if len(sys.argv) > 3 else "paper"
 
 spent: dict[str, float] = {}
 
@@ -53,8 +56,10 @@ if __name__ == "__main__":
     timed(zupt_ukf.ZuptUkf, "advance", "ZuptUkf.advance (kernel included)")
     timed(foot_core.FootZuptCore, "_features", "observation features")
     timed(foot_core, "generate_episode", "episode generation")
+    timed(foot_core.ShoeStatistic, "interval", "SHOE statistic (numpy, shoe family)")
 
-    env = FootZuptVectorEnv(num_envs=N)
+    config = None if FAMILY == "paper" else FootZuptConfig(filter_family=FAMILY, scenario="random")
+    env = FootZuptVectorEnv(num_envs=N, config=config)
     env.reset(seed=0)
     core = env.core
     zero = np.zeros((N, core.config.action_dim), np.float32)
