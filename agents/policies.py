@@ -2,7 +2,9 @@
 
 Names: ``paper`` (action 0), ``tuned`` (the shipped best constant action),
 ``adaptive`` (the innovation-based rule), ``pretrained`` (the shipped tuner
-under ``agents/pretrained/``), ``oracle`` (privileged: the constant tuned for the
+under ``agents/pretrained/``), ``gait-rule`` (foot envs, shoe family only: the SHOE
+threshold follows a gait feature of the sensors, :mod:`agents.gait_rule`, parameters in
+``agents/pretrained/gait_rule.json``), ``oracle`` (privileged: the constant tuned for the
 true context, the episode's on WaistStep and MarkerTrack, the interval's speed
 band on FootZupt's shoe family; :mod:`baselines.oracle`; a target, not a
 baseline), and for the foot envs ``real-fixed`` (action 0 of the shoe filter
@@ -19,7 +21,8 @@ runs that have none) and a tuned-actions file in its keys
 (:func:`baselines.tuned.result_key`). Paths: a run directory of ``pednav train``
 or ``pednav distill`` (``model.zip``, ``vecnormalize.pkl``, ``meta.json``), a saved SB3 model
 (``.zip``), a tuned-actions JSON file written by ``pednav tune``, or a tune run
-directory holding one.
+directory holding one, or a gait-rule parameter file (JSON with keys ``c`` and
+``feature``, written by :mod:`agents.gait_rule_search`).
 
 :class:`NormalizedModelPolicy` applies a run's observation statistics itself,
 so a learned model takes raw observations and goes through the same evaluation
@@ -39,6 +42,7 @@ import numpy as np
 from gymnasium import spaces
 
 from agents.features import FeaturePolicy
+from agents.gait_rule import PARAMS_FILE, GaitRulePolicy, is_params_file
 from baselines import InnovationAdaptivePolicy, PaperPolicy, RealFixedPolicy, TunedFixedPolicy
 from baselines.oracle import OraclePolicy
 from baselines.tuned import RESULT_NAME
@@ -47,7 +51,7 @@ from pednav_env.envs.foot_filters import FILTER_FAMILIES, LEARNED_FAMILY, requir
 #: Shipped tuners: agents/pretrained/<env name>/.
 PRETRAINED_DIR = Path(__file__).parent / "pretrained"
 #: Policy names understood besides a path.
-BUILTIN_POLICIES = ("paper", "tuned", "adaptive", "pretrained", "oracle")
+BUILTIN_POLICIES = ("paper", "tuned", "adaptive", "pretrained", "gait-rule", "oracle")
 #: Observation statistics saved beside a model trained under VecNormalize.
 STATS_NAME = "vecnormalize.pkl"
 #: Envs that play another env's named policies (same spaces and knobs): the replay
@@ -146,6 +150,22 @@ def load_run(path: str | Path) -> Any:
     return _with_features(policy, features, model)
 
 
+def _gait_rule(
+    path: Path, action_space: spaces.Box, env_id: str, families: bool, family: str | None
+) -> GaitRulePolicy:
+    """The gait rule from ``path``; ValueError off the foot envs or for another family."""
+    if not families:
+        raise ValueError(
+            f"policy gait-rule: a rule of the foot envs' shoe filter family {FAMILY_ENVS}, "
+            f"not of {env_id!r}"
+        )
+    if family not in (None, GaitRulePolicy.filter_family):
+        raise ValueError(
+            f"policy gait-rule sets the shoe filter family's knobs; it cannot run filter {family!r}"
+        )
+    return GaitRulePolicy.from_file(path, int(np.prod(action_space.shape)))
+
+
 def _with_features(policy: NormalizedModelPolicy, features: str | None, model: Any) -> Any:
     """``policy``, behind the run's feature computation when its meta.json names one."""
     if not features:
@@ -195,6 +215,8 @@ def load_policy(
         return TunedFixedPolicy.for_env(env_id, action_space, learned)
     if name == "adaptive":
         return InnovationAdaptivePolicy(action_space, env_id, learned)
+    if name == "gait-rule":
+        return _gait_rule(PARAMS_FILE, action_space, env_id, families, family)
     if name == "oracle":
         return OraclePolicy.for_env(env_id, action_space, learned)
     if name == "pretrained":
@@ -210,6 +232,8 @@ def load_policy(
     if path.suffix == ".json":
         if not path.is_file():
             raise ValueError(f"policy {name!r}: no such tuned-actions file")
+        if is_params_file(path):
+            return _gait_rule(path, action_space, env_id, families, family)
         return TunedFixedPolicy.from_file(path, env_id, action_space, family)
     if path.is_dir() and not (path / "model.zip").exists() and (path / RESULT_NAME).exists():
         return TunedFixedPolicy.from_file(path / RESULT_NAME, env_id, action_space, family)

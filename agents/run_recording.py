@@ -124,8 +124,9 @@ def summarize(rec: Recording, run: RecordingRun) -> dict[str, Any]:
 
 def resolve_policy(name: str) -> RealFilterSetup | str:
     """A fixed setup (``real-fixed``, ``paper``, or a setup JSON file), or the name
-    of a simulated-env policy (``tuned``, ``adaptive``, ``pretrained``, a run
-    directory, an SB3 ``.zip``); ``ValueError`` listing the choices otherwise."""
+    of a simulated-env policy (``tuned``, ``adaptive``, ``pretrained``, ``gait-rule``,
+    a gait-rule parameter file, a run directory, an SB3 ``.zip``); ``ValueError``
+    listing the choices otherwise."""
     from agents.evaluate import BUILTIN_POLICIES
     from agents.policies import split_name
 
@@ -135,7 +136,9 @@ def resolve_policy(name: str) -> RealFilterSetup | str:
         raise ValueError(ORACLE_ON_RECORDINGS)
     path = Path(name)
     if path.suffix.lower() == ".json":
-        return load_setup(path)
+        from agents.gait_rule import is_params_file
+
+        return name if is_params_file(path) else load_setup(path)
     if split_name(name)[0] in BUILTIN_POLICIES or path.suffix == ".zip" or path.is_dir():
         return name
     others = [n for n in dict.fromkeys(SETUP_NAMES + BUILTIN_POLICIES) if n != DEFAULT_POLICY]
