@@ -56,7 +56,7 @@ if __name__ == "__main__":
     timed(zupt_ukf.ZuptUkf, "advance", "ZuptUkf.advance (kernel included)")
     timed(foot_core.FootZuptCore, "_features", "observation features")
     timed(foot_core, "generate_episode", "episode generation")
-    timed(foot_core.ShoeStatistic, "interval", "SHOE statistic (numpy, shoe family)")
+    timed(foot_core.ShoeStatistic, "interval", "SHOE statistic (shoe family)")
 
     config = None if FAMILY == "paper" else FootZuptConfig(filter_family=FAMILY, scenario="random")
     env = FootZuptVectorEnv(num_envs=N, config=config)
