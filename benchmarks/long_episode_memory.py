@@ -3,9 +3,14 @@
 Walking gaits and the ADIS16470-like grade with no error bound, so that the
 walk runs to its end. Prints steps, wall time, peak RSS and the traced Python
 memory at 10 % and at the end of the episode.
+
+    .venv/bin/python benchmarks/long_episode_memory.py [FAMILY]
+
+FAMILY: the filter family, ``paper`` (default) or ``shoe`` (random scenario).
 """
 
 import resource
+import sys
 import time
 import tracemalloc
 
@@ -25,6 +30,8 @@ if __name__ == "__main__":
         imu_grades=("adis16470",),
         imu_grade_weights=(1.0,),
         divergence_error_m=1e9,
+        filter_family=sys.argv[1] if len(sys.argv) > 1 else "paper",
+        scenario="random",
     )
     env = FootZuptEnv(config=config)
     t0 = time.perf_counter()
