@@ -2,13 +2,14 @@
 
 Names: ``paper`` (action 0), ``tuned`` (the shipped best constant action),
 ``adaptive`` (the innovation-based rule), ``pretrained`` (the shipped tuner
-under ``agents/pretrained/``), ``gait-rule`` (foot envs, shoe family only: the SHOE
-threshold follows a gait feature of the sensors, :mod:`agents.gait_rule`, parameters in
-``agents/pretrained/gait_rule.json``), ``oracle`` (privileged: the constant tuned for the
-true context, the episode's on WaistStep and MarkerTrack, the interval's speed
-band on FootZupt's shoe family; :mod:`baselines.oracle`; a target, not a
-baseline), and for the foot envs ``real-fixed`` (action 0 of the shoe filter
-family).
+under ``agents/pretrained/``; for the foot envs' shoe family, which has no trained
+network shipped, the gait-adaptive rule ``gait-rule``), ``gait-rule`` (foot envs,
+shoe family only: the SHOE threshold follows a gait feature of the sensors,
+:mod:`agents.gait_rule`, parameters in ``agents/pretrained/gait_rule.json``),
+``oracle`` (privileged: the constant tuned for the true context, the episode's on
+WaistStep and MarkerTrack, the interval's speed band on FootZupt's shoe family;
+:mod:`baselines.oracle`; a target, not a baseline), and for the foot envs
+``real-fixed`` (action 0 of the shoe filter family).
 
 Filter families (foot envs, :mod:`pednav_env.envs.foot_filters`): every policy
 carries the family it is made for as ``filter_family`` (None on the other
@@ -221,6 +222,9 @@ def load_policy(
         return OraclePolicy.for_env(env_id, action_space, learned)
     if name == "pretrained":
         path = pretrained_dir(env_id, learned)
+        if families and learned == GaitRulePolicy.filter_family and not path.exists():
+            # The shoe family's shipped tuner is the gait-adaptive rule (docs/RESULTS.md).
+            return _gait_rule(PARAMS_FILE, action_space, env_id, families, family)
         if not (path / "model.zip").exists():
             what = env_id if learned is None else f"{env_id} (filter family {learned})"
             hint = ""
