@@ -159,6 +159,16 @@ def check_policy(name: str) -> None:
         _load_policy(name, spaces.Box(-1.0, 1.0, (4,), np.float32))
 
 
+def check_policies(names: list[str], option: str = "--policies") -> None:
+    """:func:`check_policy` for every name; a one-line ``SystemExit`` naming ``option``
+    and the first name that cannot run (for scripts that refuse before a long run)."""
+    for name in names:
+        try:
+            check_policy(name)
+        except ValueError as exc:
+            raise SystemExit(f"{option} {name}: {exc}") from None
+
+
 def check_output_path(path: str | Path, option: str) -> Path:
     """An output file whose directory exists (checked before the run, not after)."""
     path = Path(path)

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.run_recording import check_policy, run_with_policy, summarize
+from agents.run_recording import check_policies, run_with_policy, summarize
 from pednav_env.io import load_recording
 from pednav_env.io.matfile import read_mat
 from pednav_env.replay.metrics import footprint_errors
@@ -104,15 +104,6 @@ def main() -> None:
         )
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=1) + "\n")
-
-
-def check_policies(names: list[str]) -> None:
-    """Every name runs on a recording (else one line and exit, before any run)."""
-    for name in names:
-        try:
-            check_policy(name)
-        except ValueError as exc:
-            raise SystemExit(f"--policies {name}: {exc}") from None
 
 
 def footprint_summary(rows: list[dict], policies: list[str]) -> dict[str, dict[str, float]]:

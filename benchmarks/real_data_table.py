@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.run_recording import check_policy, run_with_policy, summarize
+from agents.run_recording import check_policies, run_with_policy, summarize
 from pednav_env.io import find_recordings, load_recording
 from pednav_env.replay.metrics import pyshoe_armse_as_published, track_errors
 from pednav_env.replay.runner import prepare, run_prepared
@@ -40,15 +40,6 @@ def run_policy(rec, policy: str):
     if policy in SETUP_NAMES:
         return run_prepared(prepare(rec, named_setup(policy)))
     return run_with_policy(rec, policy)[0]
-
-
-def check_policies(names: list[str]) -> None:
-    """Every name runs on a recording (else one line and exit, before any run)."""
-    for name in names:
-        try:
-            check_policy(name)
-        except ValueError as exc:
-            raise SystemExit(f"--policies {name}: {exc}") from None
 
 
 def pyshoe_ratios(rows: list[dict], policies: list[str]) -> dict[str, float]:

@@ -316,3 +316,13 @@ def test_pednav_run_errors_are_reported(capsys):
     assert main(["run", str(XIO), "--policy", "nonsense"]) == 2
     assert "unknown policy" in capsys.readouterr().err
     assert main(["run", str(XIO), "--format", "pyshoe"]) == 2
+
+
+def test_check_policies_refuses_in_one_line_before_a_run():
+    from agents.run_recording import check_policies
+
+    check_policies(["real-fixed", "tuned", "gait-rule"])
+    with pytest.raises(SystemExit, match=r"^--policies oracle: .*not applicable on recordings"):
+        check_policies(["real-fixed", "oracle"])
+    with pytest.raises(SystemExit, match=r"^--only bogus: unknown policy"):
+        check_policies(["bogus"], option="--only")
