@@ -19,7 +19,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-from scipy import stats
+from oracle_gap import paired  # benchmarks/oracle_gap.py (the script directory is on sys.path)
 
 import pednav_env  # noqa: F401  (registers the environments)
 from agents.evaluate import run_episodes
@@ -62,9 +62,7 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|")
     for name, e in err.items():
         d = e - tuned
-        same = not np.any(d != 0)
-        p_t = 1.0 if same else stats.ttest_rel(e, tuned).pvalue
-        p_w = 1.0 if same else stats.wilcoxon(e, tuned).pvalue
+        _, p_t, p_w = paired(e, tuned)
         diverged = np.mean([r.diverged for r in res[name]])
         print(
             f"| {name} | {e.mean():.3f} | {100 * diverged:.1f} % | {d.mean():+.3f} "

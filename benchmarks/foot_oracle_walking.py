@@ -23,7 +23,7 @@ from dataclasses import replace
 
 import gymnasium as gym
 import numpy as np
-from scipy import stats
+from oracle_gap import paired  # benchmarks/oracle_gap.py (the script directory is on sys.path)
 
 import pednav_env  # noqa: F401  (registers the environments)
 from agents.evaluate import run_episodes
@@ -90,8 +90,7 @@ def main() -> None:
     print("|---|---|---|---|---|---|")
     for name, e in err.items():
         d = e - bar
-        p_t = stats.ttest_rel(e, bar).pvalue if np.any(d != 0) else 1.0
-        p_w = stats.wilcoxon(e, bar).pvalue if np.any(d != 0) else 1.0
+        _, p_t, p_w = paired(e, bar)
         print(
             f"| {name} | {e.mean():.3f} | {100 * div[name]:.1f} % | {d.mean():+.3f} "
             f"| {p_t:.2g} | {p_w:.2g} |"
