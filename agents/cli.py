@@ -213,9 +213,10 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="+",
         required=True,
         help="paper, tuned, adaptive, pretrained, gait-rule (foot envs, shoe family), "
-        "oracle, or a path: a training run directory, a saved SB3 model (.zip, with "
-        "vecnormalize.pkl beside it), a tuned_actions.json from pednav tune (or its run "
-        "directory), or a gait_rule.json from agents.gait_rule_search",
+        "oracle (privileged; simulated envs only), or a path: a training run directory, "
+        "a saved SB3 model (.zip, with vecnormalize.pkl beside it), a tuned_actions.json "
+        "from pednav tune (or its run directory), or a gait_rule.json from "
+        "agents.gait_rule_search",
     )
     ev.add_argument(
         "--episodes",

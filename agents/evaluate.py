@@ -58,7 +58,7 @@ from scipy import stats
 from stable_baselines3.common.evaluation import evaluate_policy
 
 import pednav_env  # noqa: F401  (registers the environments)
-from agents.policies import BUILTIN_POLICIES, FAMILY_ENVS, ZERO_ACTION, load_policy
+from agents.policies import BUILTIN_POLICIES, FAMILY_ENVS, ZERO_ACTION, load_policy, split_name
 from baselines import PaperPolicy, TunedFixedPolicy
 from pednav_env.sb3 import NativeVecEnv
 from pednav_env.seeds import check_evaluation_seeds
@@ -72,6 +72,7 @@ __all__ = [
     "evaluate",
     "load_policy",
     "play_batch",
+    "refuse_privileged",
     "run_episodes",
     "summarize",
 ]
@@ -80,6 +81,21 @@ __all__ = [
 MAX_LANES = 128
 #: Envs whose episodes are recordings (played in sequential order, module docstring).
 RECORDING_ENVS = ("pednav/FootZuptReplay-v0",)
+
+
+def refuse_privileged(env_id: str, name: str, policy: Any = None) -> None:
+    """ValueError when policy ``name`` (or its loaded ``policy``) is privileged — it
+    reads ``info["context"]``, like the oracle — and ``env_id`` plays recordings:
+    there the context (speed band) is derived from the recording's truth track, so
+    the score would be that of a policy that sees the truth."""
+    if env_id not in RECORDING_ENVS:
+        return
+    if split_name(name)[0] == "oracle" or getattr(policy, "needs_context", False):
+        raise ValueError(
+            f"{env_id}: policy {name}: privileged (it reads the simulator's true context, "
+            "info['context']); on recordings that context comes from the truth track, so it "
+            "cannot be evaluated there"
+        )
 
 
 @dataclass(frozen=True)
@@ -168,6 +184,7 @@ def play_batch(
     order. ``on_episode(1)`` is called as each episode ends. A policy with
     ``needs_context = True`` also gets the episodes' ``info["context"]``."""
     n = batch.episodes
+    refuse_privileged(batch.env_id, str(getattr(batch.policy, "name", "")), batch.policy)
     venv = gym.make_vec(
         batch.env_id, num_envs=n, vectorization_mode="vector_entry_point", **batch.env_kwargs
     )
@@ -327,6 +344,8 @@ def evaluate(
     check_evaluation_seeds(seed, episodes)
     if plot_dir is not None and Path(plot_dir).exists() and not Path(plot_dir).is_dir():
         raise ValueError(f"plot directory {str(plot_dir)!r} is a file")
+    for name in policy_names:  # before the recordings are read
+        refuse_privileged(env_id, name)
     if env_id in RECORDING_ENVS:
         env_kwargs.setdefault("trial_order", "sequential")
         env_kwargs.setdefault("first_trial_seed", seed)
@@ -340,6 +359,8 @@ def evaluate(
             env_id, policy_names, episodes, seed, env_kwargs, plot_dir, backend, on_episode, lanes
         )
     policies = {name: load_policy(name, action_space, env_id) for name in policy_names}
+    for name, pol in policies.items():
+        refuse_privileged(env_id, name, pol)
     if "paper" not in policies:
         policies = {"paper": PaperPolicy(action_space), **policies}
     if "tuned" not in policies:
@@ -424,6 +445,8 @@ def evaluate_families(
         (name, load_policy(name, action_space, env_id, filter_family=forced))
         for name in policy_names
     ]
+    for name, pol in named:
+        refuse_privileged(env_id, name, pol)
     policies: dict[tuple[str, str], Any] = {}
     for name, pol in named:
         family = pol.filter_family or "paper"

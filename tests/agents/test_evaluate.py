@@ -247,6 +247,29 @@ def test_replay_evaluation_refuses_footprint_walks_in_one_line(capsys):
     assert "SensorConnectData_31_first5s.csv: no truth track" in err and "pednav run" in err
 
 
+def test_privileged_oracle_is_refused_on_recordings(capsys):
+    """The oracle reads info['context'], which on recordings comes from the truth track:
+    `pednav evaluate` on the replay env refuses it in one line (whatever other policies
+    are named), the API with a ValueError, also for a loaded oracle given to
+    run_episodes directly."""
+    from baselines.oracle import OraclePolicy
+
+    replay = "pednav/FootZuptReplay-v0"
+    for policies in (["oracle"], ["real-fixed", "oracle:shoe"]):
+        args = ["evaluate", replay, "--policy", *policies, "--recordings", str(REPLAY_DATA)]
+        assert main(args) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"pednav: error: {replay}: policy oracle") and err.count("\n") == 1
+        assert "privileged" in err and "truth" in err
+    with pytest.raises(ValueError, match="privileged"):
+        evaluate(replay, ["oracle"], 1, 20000, {"data_dir": str(REPLAY_DATA)})
+    space = gym.make(replay, data_dir=str(REPLAY_DATA)).action_space
+    oracle = OraclePolicy.for_env(ENV_ID, space, "shoe")
+    kwargs = {"data_dir": str(REPLAY_DATA), "filter": "shoe"}
+    with pytest.raises(ValueError, match="privileged"):
+        run_episodes(replay, oracle, 1, 20000, kwargs)
+
+
 def test_replay_env_evaluates_with_recordings_and_rejects_a_scenario(capsys):
     """The documented `pednav evaluate pednav/FootZuptReplay-v0 --policy paper` works
     with --recordings DIR; --scenario (an option the replay env lacks) is one line."""
