@@ -48,8 +48,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from pednav_env.replay.simulate import SimulateConfig, simulate_walk, write_recording_csv
+    from pednav_env.replay.simulate import (
+        SimulateConfig,
+        check_output_path,
+        simulate_walk,
+        write_recording_csv,
+    )
 
+    check_output_path(args.out)  # before the simulation
     config = SimulateConfig(
         speed_mps=None if args.speed is None else tuple(args.speed),
         gait=args.gait,
@@ -78,6 +84,10 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
 
     if args.model not in MODELS:
         raise ValueError(f"--model {args.model!r}: use one of {', '.join(MODELS)}")
+    if args.walks < 2:
+        raise ValueError(f"--walks must be ≥ 2 (each band's spread), got {args.walks}")
+    if args.plot is not None and Path(args.plot).exists() and not Path(args.plot).is_dir():
+        raise ValueError(f"--plot {args.plot}: is a file; give a directory")
     paths = []
     for item in args.recordings:
         p = Path(item)
@@ -113,7 +123,7 @@ def _add_sim2real(sub: argparse._SubParsersAction) -> None:
         "--walks",
         type=positive_int,
         default=60,
-        help="simulated walks per speed band (default 60)",
+        help="simulated walks per speed band, ≥ 2 (default 60)",
     )
     s2r.add_argument("--seed", type=int, default=0, help="simulation seed (default 0)")
     s2r.add_argument("--json", action="store_true", help="print one JSON object")
@@ -231,10 +241,14 @@ def add_recording_commands(sub: argparse._SubParsersAction) -> None:
         help="one gait class at its own speeds, instead of --speed",
     )
     si.add_argument(
-        "--duration", metavar="S", type=positive_float, default=60.0, help="s (default 60)"
+        "--duration", metavar="S", type=positive_float, default=60.0, help="s, 5…7200 (default 60)"
     )
     si.add_argument(
-        "--rate", metavar="HZ", type=positive_float, default=200.0, help="Hz (default 200)"
+        "--rate",
+        metavar="HZ",
+        type=positive_float,
+        default=200.0,
+        help="Hz, 90…1100, what the loaders read (default 200)",
     )
     si.add_argument(
         "--imu",

@@ -202,6 +202,7 @@ def load_policy(
     :data:`LEARNED_FAMILY`).
     """
     families = env_id in FAMILY_ENVS
+    replayed = env_id in POLICY_SOURCE_ENV  # recordings: no privileged policy
     env_id = POLICY_SOURCE_ENV.get(env_id, env_id)
     name, suffix = split_name(name)
     if filter_family is not None:
@@ -248,7 +249,10 @@ def load_policy(
                 f"policy {name!r} was trained with filter {policy.filter_family!r}, not {family!r}"
             )
         return policy
-    names = ", ".join((*BUILTIN_POLICIES, *other_names))
+    known = [n for n in BUILTIN_POLICIES if not (replayed and n == "oracle")]
+    if families and "real-fixed" not in other_names:
+        known.append("real-fixed")
+    names = ", ".join((*known, *other_names))
     raise ValueError(
         f"unknown policy {name!r}: use one of {names}, or a path to a training run directory, "
         f"a saved SB3 model (.zip), or a tuned-actions file ({RESULT_NAME}) or its directory"

@@ -79,6 +79,27 @@ def load_recording(
         raise ValueError(f"unknown format {format!r}; use one of {', '.join(FORMATS)}")
     if not path.is_file():
         raise ValueError(f"{path}: no such file")
+    try:
+        return _load(path, format, options, layout, footprints)
+    except ValueError as exc:
+        # every message names the file (some checks know only the rows): a folder's
+        # run, evaluation or comparison must say which recording is bad
+        msg = str(exc)
+        if path.name in msg:
+            raise
+        if msg.startswith(f"{path.stem}: "):  # named by the recording's name (the stem)
+            msg = msg[len(path.stem) + 2 :]
+        raise ValueError(f"{path.name}: {msg}") from None
+
+
+def _load(
+    path: Path,
+    format: str,
+    options: LoadOptions | None,
+    layout: CsvLayout | None,
+    footprints: FootprintChoice,
+) -> Recording:
+    """:func:`load_recording` of an existing file."""
     fmt = detect_format(path) if format == "auto" else format
     if layout is not None and fmt != "csv":
         raise ValueError(

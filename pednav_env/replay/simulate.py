@@ -41,6 +41,7 @@ from pednav_env.gait.foot import FootSimConfig, simulate_foot
 from pednav_env.gait.foot_route import Gait, RouteRandomization, random_route
 from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
+from pednav_env.io.validate import MAX_RATE_HZ, MIN_RATE_HZ
 from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
 
 Array = NDArray[np.float64]
@@ -66,6 +67,9 @@ GAIT_NAMES = {"slow_walk": Gait.SLOW_WALK, "walk": Gait.WALK, "fast_walk": Gait.
 GAIT_NAMES["run"] = Gait.RUN
 #: Stride speed range (m/s) when neither a speed range nor a gait is given.
 DEFAULT_SPEED_MPS = SpeedRouteConfig().speed_mps
+#: Longest walk (s): two hours, 1.4 million samples at 200 Hz (a longer one would
+#: fill memory before it is written).
+MAX_DURATION_S = 7200.0
 #: CSV header written by :func:`write_recording_csv`.
 CSV_COLUMNS = (
     "time (s)",
@@ -92,8 +96,10 @@ class SimulateConfig:
     speed_mps : (lo, hi) m/s, range of every stride's speed (0.1 ≤ lo ≤ hi ≤ 4),
         or None; exclusive with ``gait``. Neither: :data:`DEFAULT_SPEED_MPS`.
     gait : a name of :data:`GAIT_NAMES` (one gait class at its own speeds) or None.
-    duration_s : s, length of the walk (it ends with the last stride that fits).
-    rate_hz : Hz, IMU sample rate.
+    duration_s : s, length of the walk (it ends with the last stride that fits),
+        5 s to :data:`MAX_DURATION_S`.
+    rate_hz : Hz, IMU sample rate, in the range the loaders read
+        (:data:`pednav_env.io.validate.MIN_RATE_HZ` … ``MAX_RATE_HZ``, 90–1100 Hz).
     imu_grade : IMU error grade (None: the model's).
     stops : stand still for 1–5 s at the start of some legs (15 %).
     seed : the walk draws only from ``numpy.random.default_rng(seed)``.
@@ -119,12 +125,16 @@ class SimulateConfig:
             object.__setattr__(self, "speed_mps", (lo, hi))
         if self.gait is not None and self.gait not in GAIT_NAMES:
             raise ValueError(f"unknown gait {self.gait!r}; use one of {', '.join(GAIT_NAMES)}")
-        if not (math.isfinite(self.duration_s) and self.duration_s >= 5.0):
+        if not (math.isfinite(self.duration_s) and 5.0 <= self.duration_s <= MAX_DURATION_S):
             raise ValueError(
-                f"duration must be ≥ 5 s (2 s stand, strides, 1 s stand), got {self.duration_s}"
+                f"duration must be 5…{MAX_DURATION_S:.0f} s (2 s stand, strides, 1 s stand), "
+                f"got {self.duration_s}"
             )
-        if not (math.isfinite(self.rate_hz) and 50.0 <= self.rate_hz <= 2000.0):
-            raise ValueError(f"rate must be in 50…2000 Hz, got {self.rate_hz}")
+        if not (math.isfinite(self.rate_hz) and MIN_RATE_HZ <= self.rate_hz <= MAX_RATE_HZ):
+            raise ValueError(
+                f"rate must be in {MIN_RATE_HZ:.0f}…{MAX_RATE_HZ:.0f} Hz (what the loaders "
+                f"read back), got {self.rate_hz}"
+            )
         grade = self.grade
         if grade not in IMU_GRADES:
             raise ValueError(f"unknown IMU grade {grade!r}; use one of {', '.join(IMU_GRADES)}")
@@ -190,11 +200,20 @@ def simulate_walk(config: SimulateConfig) -> SimulatedWalk:
     )
 
 
-def write_recording_csv(walk: SimulatedWalk, path: str | Path) -> Path:
-    """Write ``walk`` as a generic CSV recording (module docstring)."""
+def check_output_path(path: str | Path) -> Path:
+    """``path`` as a file to write: ValueError when its directory does not exist or
+    it is a directory (checked before a walk is simulated)."""
     path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{path}: is a directory; give a file name (e.g. {path / 'walk.csv'})")
     if not path.parent.is_dir():
         raise ValueError(f"{path}: directory {path.parent} does not exist")
+    return path
+
+
+def write_recording_csv(walk: SimulatedWalk, path: str | Path) -> Path:
+    """Write ``walk`` as a generic CSV recording (module docstring)."""
+    path = check_output_path(path)
     data = np.column_stack(
         (walk.time, walk.omega_b, walk.f_b, walk.pos_n, walk.stance.astype(int), walk.gait)
     )

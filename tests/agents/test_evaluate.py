@@ -183,9 +183,13 @@ def test_cli_evaluate_and_errors(capsys, tmp_path):
     assert main(["evaluate", ENV_ID, "--policy", "soothsayer", "--episodes", "1"]) == 2
     err = capsys.readouterr().err
     assert "unknown policy 'soothsayer'" in err and err.count("\n") == 1
-    for name in ("paper", "tuned", "adaptive", "pretrained"):
+    # every name the foot env accepts, real-fixed (its shoe family's action 0) among them
+    for name in ("paper", "tuned", "adaptive", "pretrained", "gait-rule", "oracle", "real-fixed"):
         assert name in err
-    assert "real-fixed" not in err  # pednav run's setup, not an evaluate policy
+    replay = "pednav/FootZuptReplay-v0"
+    with pytest.raises(ValueError, match="unknown policy 'soothsayer'") as exc:
+        load_policy("soothsayer", gym.make(ENV_ID).action_space, replay)
+    assert "real-fixed" in str(exc.value) and "oracle" not in str(exc.value)  # not on recordings
     with pytest.raises(ValueError, match="no such model"):
         load_policy("missing.zip", gym.make(ENV_ID).action_space)
 
@@ -245,6 +249,20 @@ def test_replay_evaluation_refuses_footprint_walks_in_one_line(capsys):
     err = capsys.readouterr().err
     assert err.startswith("pednav: error: pednav/FootZuptReplay-v0: ") and err.count("\n") == 1
     assert "SensorConnectData_31_first5s.csv: no truth track" in err and "pednav run" in err
+
+
+def test_replay_evaluation_names_the_bad_recording_of_a_folder(tmp_path, capsys):
+    """A recording with a NaN sample in a folder: one line naming the file and its line."""
+    (tmp_path / "good.mat").write_bytes(next(REPLAY_DATA.glob("*.mat")).read_bytes())
+    rows = [f"{0.005 * k:.3f},0,0,0,0,0,9.81,0,0,0" for k in range(1, 9)]
+    rows[4] = rows[4].replace(",0,0,0,0,0,9.81", ",0,nan,0,0,0,9.81")
+    header = "time,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z,pos_x,pos_y,pos_z"
+    (tmp_path / "bad.csv").write_text("\n".join([header, *rows]) + "\n")
+    args = ["evaluate", "pednav/FootZuptReplay-v0", "--policy", "real-fixed"]
+    assert main([*args, "--recordings", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("pednav: error: ") and err.count("\n") == 1
+    assert "bad.csv: angular rate" in err and "line 6" in err
 
 
 def test_privileged_oracle_is_refused_on_recordings(capsys):

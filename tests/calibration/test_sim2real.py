@@ -80,6 +80,9 @@ def test_cli_sim2real_json(capsys: pytest.CaptureFixture[str]) -> None:
     [
         (["/nonexistent/walk.mat"], "no such file"),
         ([str(PYSHOE_SAMPLE), "--model", "nope"], "--model"),
+        ([str(PYSHOE_SAMPLE), "--walks", "1"], "--walks must be ≥ 2"),
+        # refused before any walk is simulated (the path is the recording, a file)
+        ([str(PYSHOE_SAMPLE), "--plot", str(PYSHOE_SAMPLE)], "is a file; give a directory"),
     ],
 )
 def test_cli_sim2real_bad_input_is_one_line(

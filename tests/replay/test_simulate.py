@@ -119,3 +119,27 @@ def test_simulate_errors_are_one_line(tmp_path, capsys):
     assert err.startswith("pednav: error: speed range") and err.count("\n") == 1
     assert main(["simulate", "--out", str(tmp_path / "no" / "x.csv")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_simulate_refuses_what_it_cannot_write_or_read_back(tmp_path, capsys, monkeypatch):
+    """An output that is a directory (or in a missing one) is refused in one line before
+    anything is simulated; rates the loaders refuse (90–1100 Hz) and walks too long to
+    hold in memory are refused by the config."""
+    import pednav_env.replay.simulate as simulate
+
+    def no_simulation(config):
+        raise AssertionError("simulated before the output path was checked")
+
+    monkeypatch.setattr(simulate, "simulate_walk", no_simulation)
+    for out, why in ((tmp_path, "is a directory"), (tmp_path / "no" / "x.csv", "does not exist")):
+        assert main(["simulate", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"pednav: error: {out}: ") and err.count("\n") == 1
+        assert why in err
+    for rate in (60.0, 1500.0):  # pednav run refuses both (median rate outside 90–1100 Hz)
+        with pytest.raises(ValueError, match="rate must be in 90…1100 Hz"):
+            SimulateConfig(rate_hz=rate)
+    for rate in (90.0, 1100.0):
+        SimulateConfig(rate_hz=rate)
+    with pytest.raises(ValueError, match="duration must be 5…7200 s"):
+        SimulateConfig(duration_s=1e9)
