@@ -3,20 +3,26 @@
 Same protocol as the tuned-constant search (:func:`baselines.tuned.search`):
 the candidates are scored by the mean time-averaged error on a fixed set of
 training episodes of ``pednav/FootZupt-v0`` with the shoe filter family
-(calibrated scenario; seeds from :data:`pednav_env.seeds.SEARCH_SEED`, common
-random numbers for all candidates), one batched vector env per generation with a
-lane per (candidate, episode) (:func:`baselines.rollout.first_episode_errors`).
-The search runs in x ∈ [−1, 1]⁵ with c = (x0, SLOPE_SCALE · x1, x2, x3, x4),
-started from the shipped shoe ``tuned`` constant with c1 = 0. The chosen
-parameters and that start (the tuned constant) are then played on fresh
-training episodes (:data:`pednav_env.seeds.REEVALUATION_SEED`): the honest
-figure, ``reevaluation``.
+(calibrated scenario; the seeds of search episode set ``episode_set``,
+:func:`pednav_env.seeds.search_seeds`, set 0 starting at
+:data:`pednav_env.seeds.SEARCH_SEED`; common random numbers for all
+candidates), one batched vector env per generation with a lane per (candidate,
+episode) (:func:`baselines.rollout.first_episode_errors`). The search runs in
+x ∈ [−1, 1]⁵ with c = (x0, SLOPE_SCALE · x1, x2, x3, x4), started from the
+shipped shoe ``tuned`` constant with c1 = 0. The chosen parameters and that
+start (the tuned constant) are then played on fresh training episodes
+(:data:`pednav_env.seeds.REEVALUATION_SEED`, the same whatever the episode set
+and CMA-ES seed, so searches are compared paired): the honest figure,
+``reevaluation``.
 
     python -m agents.gait_rule_search --out runs/gait-rule [--episodes 16
-        --generations 8 --popsize 8 --reevaluate 64 --seed 1]
+        --generations 8 --popsize 8 --reevaluate 64 --seed 1 --episode-set 0]
 
 writes ``gait_rule.json`` in ``--out`` (a file :class:`agents.gait_rule.GaitRulePolicy`
-reads; ``pednav evaluate --policy PATH/gait_rule.json`` plays it).
+reads; ``pednav evaluate --policy PATH/gait_rule.json`` plays it). ``--seed``
+seeds CMA-ES only; ``--episode-set k`` chooses the training episodes, so
+independent searches take a different set and seed each (e.g. ``--seed k
+--episode-set k``).
 """
 
 from __future__ import annotations
@@ -33,7 +39,7 @@ from gymnasium import spaces
 from agents.gait_rule import ENV_ID, FAMILY, N_PARAMS, GaitRuleParams, rule_actions, write_params
 from baselines.rollout import first_episode_errors
 from baselines.tuned import TunedFixedPolicy
-from pednav_env.seeds import REEVALUATION_SEED, SEARCH_SEED
+from pednav_env.seeds import REEVALUATION_SEED, search_seeds
 
 #: c1 = SLOPE_SCALE · x1: a change of 1 in a0 (two decades of γ) per decade of the
 #: feature at x1 = 0.5.
@@ -75,8 +81,11 @@ def search(
     seed: int = 1,
     reevaluate_episodes: int = 64,
     base: GaitRuleParams | None = None,
+    episode_set: int = 0,
 ) -> tuple[GaitRuleParams, dict[str, Any]]:
-    """CMA-ES over the rule's parameters; returns them and the search's record."""
+    """CMA-ES over the rule's parameters on the training episodes of
+    ``episode_set`` (CMA-ES seeded with ``seed``); returns them and the search's
+    record."""
     import cma
 
     if episodes < 1 or generations < 1 or popsize < 2 or reevaluate_episodes < 0:
@@ -84,7 +93,7 @@ def search(
             "episodes, generations ≥ 1, popsize ≥ 2 and reevaluate_episodes ≥ 0 are required"
         )
     base = base or GaitRuleParams(c=(0.0,) * N_PARAMS)
-    seeds = [SEARCH_SEED + i for i in range(episodes)]
+    seeds = search_seeds(episode_set, episodes)
     x0 = tuned_start()
     es = cma.CMAEvolutionStrategy(
         x0, sigma0, {"bounds": [-1.0, 1.0], "popsize": popsize, "seed": seed, "verbose": -9}
@@ -121,6 +130,7 @@ def search(
         "objective_m": float(es.result.fbest),
         "evaluations": int(es.result.evaluations),
         "episodes": episodes,
+        "episode_set": episode_set,
         "episode_seeds": [seeds[0], seeds[-1]],
         "generations": generations,
         "popsize": popsize,
@@ -141,14 +151,27 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--generations", type=int, default=8)
     ap.add_argument("--popsize", type=int, default=8)
     ap.add_argument("--reevaluate", type=int, default=64)
-    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--seed", type=int, default=1, help="CMA-ES seed")
+    ap.add_argument(
+        "--episode-set",
+        type=int,
+        default=0,
+        help="training episode set k: seeds SEARCH_SEED + k·SEARCH_SET_STRIDE + i "
+        "(pednav_env.seeds.search_seeds; 0 = the shipped search's episodes)",
+    )
     args = ap.parse_args(argv)
     try:
         out = Path(args.out)
         if out.exists() and not out.is_dir():
             raise ValueError(f"--out {out}: not a directory")
         params, record = search(
-            args.episodes, args.generations, args.popsize, 0.25, args.seed, args.reevaluate
+            args.episodes,
+            args.generations,
+            args.popsize,
+            0.25,
+            args.seed,
+            args.reevaluate,
+            episode_set=args.episode_set,
         )
         path = write_params(params, out / OUT_NAME, record)
     except ValueError as exc:

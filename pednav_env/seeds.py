@@ -26,6 +26,13 @@ SEARCH_SEED = 900_000_000  # tuned-fixed search episodes (training side)
 #: A search's result is re-evaluated on fresh training episodes from this seed on
 #: (never searched on), so the reported objective is not the best of many draws.
 REEVALUATION_SEED = 910_000_000
+#: A search may use its own set of training episodes: set k is the seeds
+#: ``SEARCH_SEED + k · SEARCH_SET_STRIDE + [0, episodes)`` (:func:`search_seeds`);
+#: set 0 (seeds from SEARCH_SEED) is the one every shipped search used. The sets
+#: are disjoint and all lie below REEVALUATION_SEED.
+SEARCH_SET_STRIDE = 100_000
+#: Search episode sets are 0 … MAX_SEARCH_SET − 1.
+MAX_SEARCH_SET = (REEVALUATION_SEED - SEARCH_SEED) // SEARCH_SET_STRIDE
 #: The final-evaluation range: evaluation seeds kept untouched during development
 #: and played once, with the shipped policies, for the published tables
 #: (docs/RESULTS.md). Development evaluation uses 5 000 – 9 999 and 20 000 – 29 999.
@@ -39,6 +46,17 @@ def check_evaluation_seeds(seed: int, episodes: int) -> None:
             f"evaluation seeds must lie in [0, {TRAIN_SEED_BASE}); got seed={seed}, "
             f"episodes={episodes} (seeds ≥ {TRAIN_SEED_BASE} are reserved for training)"
         )
+
+
+def search_seeds(episode_set: int, episodes: int) -> list[int]:
+    """The seeds of search episode set ``episode_set``: ``episodes`` training
+    episodes, disjoint from every other set and from the re-evaluation episodes."""
+    if not 0 <= episode_set < MAX_SEARCH_SET:
+        raise ValueError(f"episode_set must be in [0, {MAX_SEARCH_SET}), got {episode_set}")
+    if not 1 <= episodes <= SEARCH_SET_STRIDE:
+        raise ValueError(f"episodes must be in [1, {SEARCH_SET_STRIDE}], got {episodes}")
+    first = SEARCH_SEED + episode_set * SEARCH_SET_STRIDE
+    return list(range(first, first + episodes))
 
 
 def training_seed(run_seed: int) -> int:

@@ -19,6 +19,12 @@ from agents.policies import load_policy
 from baselines.tuned import constant_action_errors
 from pednav_env.envs.foot_core import OBS_FEATURES, FootZuptConfig
 from pednav_env.gait.foot_route import RouteRandomization
+from pednav_env.seeds import (
+    FINAL_EVALUATION_SEEDS,
+    REEVALUATION_SEED,
+    TRAIN_SEED_BASE,
+    search_seeds,
+)
 
 ENV_ID = "pednav/FootZupt-v0"
 NAMES = [f.name for f in OBS_FEATURES]
@@ -133,8 +139,35 @@ def test_search_rollout_with_slope_zero_is_the_constant_and_writes_a_file(tmp_pa
     const = constant_action_errors(ENV_ID, np.array([[c[0], *c[2:]]]), seeds, {"filter": "shoe"})
     np.testing.assert_allclose(ours, const, rtol=1e-6)
     args = ["--episodes", "1", "--generations", "1", "--popsize", "2", "--reevaluate", "1"]
-    assert search_main(["--out", str(tmp_path / "run"), *args]) == 0
+    assert search_main(["--out", str(tmp_path / "run"), *args, "--episode-set", "3"]) == 0
     params = read_params(tmp_path / "run" / "gait_rule.json")
     assert params.feature == "accel_excess_absmax"
+    record = json.loads((tmp_path / "run" / "gait_rule.json").read_text())
+    # set 3: SEARCH_SEED + 3 · 100 000; re-evaluated on the shared fresh episodes
+    assert record["episode_set"] == 3 and record["episode_seeds"] == [900_300_000] * 2
+    assert record["reevaluation"]["episode_seeds"] == [910_000_000] * 2
     assert search_main(["--out", str(tmp_path / "run" / "gait_rule.json"), *args]) == 2
     assert "not a directory" in capsys.readouterr().err
+
+
+def test_search_episode_sets_are_disjoint_training_seeds():
+    """Set 0 is the shipped search's episodes (900 000 000 …); every set lies on
+    the training side, below the re-evaluation episodes, apart from the others."""
+    assert search_seeds(0, 16) == list(range(900_000_000, 900_000_016))
+    sets = [set(search_seeds(k, 100_000)) for k in (0, 1, 2, 99)]
+    assert all(not (a & b) for i, a in enumerate(sets) for b in sets[i + 1 :])
+    every = set().union(*sets)
+    assert min(every) >= TRAIN_SEED_BASE and max(every) < REEVALUATION_SEED
+    assert not every & set(FINAL_EVALUATION_SEEDS)
+    for bad, match in (((100, 16), "episode_set"), ((-1, 16), "episode_set")):
+        with pytest.raises(ValueError, match=match):
+            search_seeds(*bad)
+    with pytest.raises(ValueError, match="episodes"):
+        search_seeds(1, 100_001)
+
+
+def test_search_cli_refuses_an_episode_set_out_of_range(tmp_path, capsys):
+    args = ["--out", str(tmp_path / "run"), "--episodes", "1", "--episode-set", "100"]
+    assert search_main(args) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: episode_set must be in [0, 100)") and err.count("\n") == 1
