@@ -22,7 +22,8 @@ shipped one): the objective against the constant it started from, in sample.
 ``table`` prints per search its parameters, its objective, its re-evaluation against
 ``tuned`` and against the shipped rule (paired t-test), and, from ``--dev`` (the
 output of ``pednav evaluate pednav/FootZupt-v0 --policy tuned gait-rule S1.json …
---json``, policies named by the paths given), its development mean, divergence and
+--json``, policies named by the paths given; ``gait-rule`` there is ``--shipped``),
+its development mean, divergence and
 paired difference against ``tuned``; then the mean ± sd over the searches (files
 whose record has ``averaged_from`` are shown but not counted) and the selection rule
 of docs/RESULTS.md applied to the re-evaluations only: the lowest re-evaluated mean
@@ -121,11 +122,11 @@ def insample(paths: list[str]) -> None:
         )
 
 
-def dev_rows(dev: dict[str, Any]) -> dict[str, dict[str, Any]]:
-    """The dev evaluation's policies by resolved path (``gait-rule``: the shipped file)."""
+def dev_rows(dev: dict[str, Any], shipped: str) -> dict[str, dict[str, Any]]:
+    """The dev evaluation's policies by resolved path (``gait-rule``: ``shipped``)."""
     out = {}
     for p in dev["policies"]:
-        key = str(PARAMS_FILE.resolve()) if p["name"] == "gait-rule" else p["name"]
+        key = shipped if p["name"] == "gait-rule" else p["name"]
         out[str(Path(key).resolve()) if key != "tuned" else "tuned"] = p
     return out
 
@@ -135,7 +136,7 @@ def table(paths: list[str], shipped: str, dev_path: str | None, markdown: bool) 
     runs = [load(p) for p in paths]
     check_same_episodes([ship, *runs])
     dev = json.loads(Path(dev_path).read_text()) if dev_path else None
-    rows_dev = dev_rows(dev) if dev else {}
+    rows_dev = dev_rows(dev, shipped) if dev else {}
     if dev and "tuned" not in rows_dev:
         raise ValueError(f"{dev_path}: no policy named tuned")
     tuned_dev = np.asarray(rows_dev["tuned"]["episode_errors"]) if dev else None
