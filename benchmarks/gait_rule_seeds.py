@@ -23,12 +23,11 @@ shipped one): the objective against the constant it started from, in sample.
 ``tuned`` and against the shipped rule (paired t-test), and, from ``--dev`` (the
 output of ``pednav evaluate pednav/FootZupt-v0 --policy tuned gait-rule S1.json …
 --json``, policies named by the paths given; ``gait-rule`` there is ``--shipped``),
-its development mean, divergence and
-paired difference against ``tuned``; then the mean ± sd over the searches (files
-whose record has ``averaged_from`` are shown but not counted) and the selection rule
-of docs/RESULTS.md applied to the re-evaluations only: the lowest re-evaluated mean
-replaces the shipped rule only if it beats it there at paired p < 0.05.
-Nothing is replayed by ``table``.
+its development mean, divergence and paired difference against ``tuned``; then the
+mean ± sd over the searches (files whose record has ``averaged_from`` are shown but
+not counted) and the selection rule of docs/RESULTS.md applied to the
+re-evaluations only: the lowest re-evaluated mean replaces the shipped rule only if
+it beats it there at paired p < 0.05. Nothing is replayed by ``table``.
 """
 
 from __future__ import annotations
