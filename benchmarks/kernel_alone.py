@@ -114,7 +114,12 @@ def pair(path: str, tree_a: str, tree_b: str, reps: int = 10) -> None:
         )
 
     def inputs(mod, args):  # the blocks' NamedTuples rebuilt with the tree's own classes
-        return tuple(getattr(mod, type(a).__name__)(*a) for a in copy.deepcopy(args))
+        # (a tree whose class has fewer fields, e.g. an older KernelSettings, takes the first ones)
+        out = []
+        for a in copy.deepcopy(args):
+            cls = getattr(mod, type(a).__name__)
+            out.append(cls(*a[: len(cls._fields)]))
+        return tuple(out)
 
     for mod in kernels.values():
         mod.advance_block(*inputs(mod, calls[0]))  # compile

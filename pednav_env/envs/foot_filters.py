@@ -21,6 +21,8 @@ Both families may add the minimum stance duration as a fifth knob
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -63,12 +65,14 @@ def require_family(family: str) -> str:
 def family_filter(family: str, scenario: str) -> ZuptUkfConfig:
     """The filter at action 0 of ``family``: paper 003's (with its real-data gyro-bias
     calibration at rest except in the paper scenario, whose simulation has none),
-    or ``real-fixed``'s."""
+    or ``real-fixed``'s, computed with the sigma points' angle-sum forms
+    (``angle_sums``: the same filter, other rounding, less kernel time;
+    docs/PERFORMANCE.md)."""
     if require_family(family) == "paper":
         return ZuptUkfConfig(calibrate_gyro_bias=scenario != "paper")
     from pednav_env.replay.setup import real_fixed_setup
 
-    return real_fixed_setup().filter
+    return replace(real_fixed_setup().filter, angle_sums=True)
 
 
 def shoe_knobs(filt: ZuptUkfConfig) -> tuple[Knob, ...]:

@@ -56,10 +56,12 @@ TRIAL_ORDERS = ("random", "sequential")
 def family_setup(family: str) -> RealFilterSetup:
     """Action 0 of ``family`` = the simulated env's action-0 filter: paper — eq (5)
     at 0.22 rad/s / 0.33 m/s², gyro-bias calibration (FootZuptConfig, random
-    scenario); shoe — the ``real-fixed`` setup."""
+    scenario); shoe — the ``real-fixed`` setup with the angle-sum forms
+    (:func:`pednav_env.envs.foot_filters.family_filter`)."""
     if require_family(family) == "paper":
         return RealFilterSetup(filter=ZuptUkfConfig(calibrate_gyro_bias=True))
-    return real_fixed_setup()
+    setup = real_fixed_setup()
+    return replace(setup, filter=replace(setup.filter, angle_sums=True))
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,7 @@ import numpy as np
 from numba import njit
 
 from pednav_env.nav.preintegration import SigmaPoints
+from pednav_env.nav.sigma_angles import sigma_attitudes
 from pednav_env.nav.ukf import floored_covariance
 from pednav_env.rotations import euler_dcm_rows, wrap_float
 
@@ -79,6 +80,28 @@ def state_mean(chi: np.ndarray, Wm: np.ndarray, out: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def residual_mean(chi: np.ndarray, dev: np.ndarray, Wm: np.ndarray, out: np.ndarray) -> None:
+    """``out`` (9,) ← the central point of ``chi`` (S, 9) plus the ``Wm``-weighted
+    sum of the residuals ``dev`` (S, 9), angles wrapped: :func:`state_mean` from
+    residuals computed elsewhere (:func:`pednav_env.nav.sigma_angles.moved_residuals`)."""
+    for d in range(9):
+        acc = 0.0
+        for s in range(chi.shape[0]):
+            acc += Wm[s] * dev[s, d]
+        out[d] = _wrap(chi[0, d] + acc) if d >= FIRST_ANGLE else chi[0, d] + acc
+
+
+@njit(cache=True)
+def residuals(chi: np.ndarray, dev: np.ndarray) -> None:
+    """``dev`` (S, 9) ← the residuals of sigma states ``chi`` (S, 9) from the
+    central point, angles wrapped (filterpy's ``residual_x``)."""
+    for s in range(chi.shape[0]):
+        for d in range(9):
+            v = chi[s, d] - chi[0, d]
+            dev[s, d] = _wrap(v) if d >= FIRST_ANGLE else v
+
+
+@njit(cache=True)
 def prior_moments(
     chi: np.ndarray,
     Wm: np.ndarray,
@@ -91,8 +114,10 @@ def prior_moments(
 ) -> None:
     """Unscented mean ``x`` (9,) and covariance ``P`` (9, 9) of sigma states ``chi``
     (S, 9) plus Q = Σ_p powers_p basis_p (:func:`pednav_env.nav.zupt_model.process_noise`):
-    filterpy's ``unscented_transform`` with the wrapped-angle mean and residual,
-    the residuals from the central point computed once (scratch ``dev`` (S, 9)).
+    filterpy's ``unscented_transform`` with the wrapped-angle mean and residual.
+    ``dev`` (S, 9) holds the residuals from the central point (:func:`residuals`
+    or :func:`pednav_env.nav.sigma_angles.moved_residuals`) and is overwritten
+    with the residuals from the mean; of ``chi`` only the central point is read.
 
     Every entry is the sum filterpy's formula gives, in its order: the weighted
     terms of s = 0 … S − 1 from 0, then Q's powers. The loops run over the sigma
@@ -105,11 +130,7 @@ def prior_moments(
     for s in range(ns):
         w = Wm[s]
         for d in range(9):
-            v = chi[s, d] - chi[0, d]
-            if d >= FIRST_ANGLE:
-                v = _wrap(v)
-            dev[s, d] = v
-            x[d] += w * v
+            x[d] += w * dev[s, d]
     for d in range(9):
         acc = x[d]
         x[d] = _wrap(chi[0, d] + acc) if d >= FIRST_ANGLE else chi[0, d] + acc
@@ -266,6 +287,7 @@ def draw_sigmas(
     spread: float,
     sig: SigmaPoints,
     work: AlgebraScratch,
+    angle_sums: bool = False,
 ) -> bool:
     """Sigma points of (x, P) with ``spread`` = L + λ, written into ``sig`` as
     attitude matrices, velocities and positions (module docstring;
@@ -276,7 +298,10 @@ def draw_sigmas(
 
     An angle of a point equal to the central point's (a zero in the factor's
     column: θ for the last two columns, γ for the last) takes the central
-    point's cosine and sine instead of computing them again (the same values)."""
+    point's cosine and sine instead of computing them again (the same values).
+    With ``angle_sums`` the attitudes come from the central point's cosines and
+    sines by the angle-sum formulas (:func:`pednav_env.nav.sigma_angles.sigma_attitudes`;
+    the same rotations, other rounding)."""
     C, v, p = sig
     A, L, chi = work.A, work.L, work.chi
     n = 9
@@ -289,6 +314,15 @@ def draw_sigmas(
         floored = np.empty((n, n))
         floored_covariance(A, floored)
         cholesky_lower(floored, L)
+    if angle_sums:
+        for s in range(2 * n + 1):
+            sign = 0.0 if s == 0 else (1.0 if s <= n else -1.0)
+            k = (s - 1) % n
+            for r in range(3):
+                p[s, r] = x[r] + sign * L[r, k] if s > 0 else x[r]
+                v[s, r] = x[3 + r] + sign * L[3 + r, k] if s > 0 else x[3 + r]
+        sigma_attitudes(x, L, C)
+        return repaired
     yaw0, pitch0, roll0 = _wrap(x[8]), _wrap(x[6]), _wrap(x[7])
     cy0, sy0 = math.cos(yaw0), math.sin(yaw0)
     cp0, sp0 = math.cos(pitch0), math.sin(pitch0)
@@ -332,14 +366,16 @@ def redraw_sigmas(
     sig_C: np.ndarray,
     sig_v: np.ndarray,
     sig_p: np.ndarray,
+    angle_sums: bool = False,
 ) -> np.ndarray:
     """Draw the sigma points ``sig_C``, ``sig_v``, ``sig_p`` (N, S, ·) of walkers
     ``lanes`` from their (x, P) rows (``x`` (B, 9), ``P`` (B, 9, 9);
-    :func:`draw_sigmas`); returns the mask of
+    :func:`draw_sigmas`, ``angle_sums`` as there); returns the mask of
     covariances that had to be repaired."""
     work = new_algebra_scratch()
     bad = np.zeros(lanes.shape[0], dtype=np.bool_)
     for j in range(lanes.shape[0]):
         i = lanes[j]
-        bad[j] = draw_sigmas(x[j], P[j], spread, SigmaPoints(sig_C[i], sig_v[i], sig_p[i]), work)
+        points = SigmaPoints(sig_C[i], sig_v[i], sig_p[i])
+        bad[j] = draw_sigmas(x[j], P[j], spread, points, work, angle_sums)
     return bad

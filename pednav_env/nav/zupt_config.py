@@ -8,7 +8,12 @@ Defaults are paper 003's simulation. Choices the paper leaves open
 - process noise Q from the filter's assumed IMU model ``assumed_imu``
   (:mod:`pednav_env.nav.zupt_model`), times ``process_noise_scale``;
 - optional χ² gating of a ZUPT on its NIS (off in the paper scenario);
-- ZUPTs at stance boundaries (the paper) or at every stance sample.
+- ZUPTs at stance boundaries (the paper) or at every stance sample;
+- the sigma points' angles by the direct formulas (every inverse-trigonometric
+  and sincos call; paper 003's path) or, with ``angle_sums``, by the angle-sum
+  and difference forms of :mod:`pednav_env.nav.sigma_angles` (the same filter,
+  other rounding; the foot envs' shoe family, whose ZUPT at every stance sample
+  makes these calls most of its cost).
 """
 
 from __future__ import annotations
@@ -61,6 +66,8 @@ class ZuptUkfConfig:
     #: Off for the paper's simulation, whose drift changes every step.
     calibrate_gyro_bias: bool = False
     g: float = STANDARD_GRAVITY
+    #: Sigma-point angles by angle-sum forms (:mod:`pednav_env.nav.sigma_angles`).
+    angle_sums: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "update_mode", UpdateMode(self.update_mode))
@@ -80,6 +87,10 @@ class ZuptUkfConfig:
             v = getattr(self, name)
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
                 raise ValueError(f"ZuptUkfConfig.{name} must be a finite number > 0, got {v!r}")
+        if not isinstance(self.angle_sums, bool):
+            raise ValueError(
+                f"ZuptUkfConfig.angle_sums must be True or False, got {self.angle_sums!r}"
+            )
         if not math.isfinite(self.beta):
             raise ValueError(f"ZuptUkfConfig.beta must be finite, got {self.beta!r}")
         if self.gate_probability is not None and not (0 < self.gate_probability < 1):

@@ -40,15 +40,12 @@ called at every sample are inlined by numba: a compiled call per sample, with
 whole tuples as arguments, would cost more than the sample's arithmetic
 (docs/PERFORMANCE.md).
 
-Compiled code here, against the rule of one batched numpy call chain
-(docs/CONVENTIONS.md), because ZUPTs fall at data-dependent samples of each
-walker: a numpy engine must run them in rounds across walkers, at a per-call
-cost (docs/PERFORMANCE.md). Walker i's arithmetic never depends on the others,
-so lane i of a vector env equals a scalar env bit for bit.
+Compiled, against the rule of one numpy call chain (docs/CONVENTIONS.md), as
+ZUPTs fall at data-dependent samples of each walker (docs/PERFORMANCE.md);
+walker i's arithmetic never depends on the others (lanes equal scalar envs).
 
-Numba caches the compiled functions on disk per source file; after editing a
-compiled function of another module that this one calls, touch this file (or
-clear ``__pycache__``) so that the cache is rebuilt.
+Numba caches compiled code per source file: after editing a compiled function
+of a module this one calls, touch this file (or clear ``__pycache__``).
 """
 
 from __future__ import annotations
@@ -76,11 +73,14 @@ from pednav_env.nav.preintegration import (
     strapdown_increment,
     weighted_sums,
 )
+from pednav_env.nav.sigma_angles import moved_residuals
 from pednav_env.nav.zupt_algebra import (
     AlgebraScratch,
     draw_sigmas,
     new_algebra_scratch,
     prior_moments,
+    residual_mean,
+    residuals,
     state_mean,
     zupt_update,
 )
@@ -100,6 +100,7 @@ class KernelSettings(NamedTuple):
     boundaries_only: bool  # ZUPTs at stance start and end (paper 003), else at every stance sample
     spread: float  # L + λ of the sigma points
     speed_max: float  # m/s, divergence speed of the central sigma point
+    angle_sums: bool  # sigma-point angles by angle-sum forms (pednav_env.nav.sigma_angles)
 
 
 class WalkerKnobs(NamedTuple):
@@ -304,6 +305,8 @@ def zupt(
     for p in range(zs.powers.shape[0]):
         zs.powers[p] = pw * q_scale
         pw *= interval_s
+    if not s.angle_sums:  # else moved_residuals gave them
+        residuals(zs.chi, zs.dev)
     prior_moments(zs.chi, model.Wm, model.Wc, model.q_basis, zs.powers, zs.dev, zs.x, zs.P)
     logging = log.index.shape[0] > 0
     if logging:
@@ -318,7 +321,7 @@ def zupt(
         filt.x[i, r] = zs.x[r]
         for c in range(9):
             filt.P[i, r, c] = zs.P[r, c]
-    if draw_sigmas(zs.x, zs.P, s.spread, sig, zs.alg):
+    if draw_sigmas(zs.x, zs.P, s.spread, sig, zs.alg, s.angle_sums):
         filt.counters[i, 2] += 1
     if logging:
         log.index[n_log, 0] = i
@@ -351,10 +354,15 @@ def mean_state_after(
     Wm: np.ndarray,
     zs: ZuptScratch,
     out: np.ndarray,
+    angle_sums: bool,
 ) -> None:
     """``out`` (9,) ← the mean state of the sigma points moved over τ (s)."""
-    moved_states(sig, pre, tau, g, zs.chi, zs.C_moved)
-    state_mean(zs.chi, Wm, out)
+    if angle_sums:
+        moved_residuals(sig, pre, tau, g, zs.chi, zs.C_moved, zs.dev)
+        residual_mean(zs.chi, zs.dev, Wm, out)
+    else:
+        moved_states(sig, pre, tau, g, zs.chi, zs.C_moved)
+        state_mean(zs.chi, Wm, out)
 
 
 # ------------------------------------------------------------------ walker and block
@@ -410,7 +418,10 @@ def advance_walker(
         # ZUPT at this instant: the state before sample j is integrated
         if event and moving and j < valid and div_at > k:
             tau = (j - anchor) * dt
-            moved_states(sig, pre, tau, g, zs.chi, zs.C_moved)
+            if s.angle_sums:
+                moved_residuals(sig, pre, tau, g, zs.chi, zs.C_moved, zs.dev)
+            else:
+                moved_states(sig, pre, tau, g, zs.chi, zs.C_moved)
             for r in range(3):  # the central point's velocity and position
                 v_c[r], p_c[r] = zs.chi[0, 3 + r], zs.chi[0, r]
             if anchor_bad or diverging(zs.C_moved, 0, v_c, p_c, s.speed_max):
@@ -445,7 +456,7 @@ def advance_walker(
             if t == valid:
                 out.position[i] = p_mean
         if record_state:
-            mean_state_after(sig, pre, tau, g, Wm, zs, states[i, j])
+            mean_state_after(sig, pre, tau, g, Wm, zs, states[i, j], s.angle_sums)
     # end of the block: divergence after the last ZUPT, sigma points moved to K
     if div_at > k and first_bad <= k:
         div_at = first_bad

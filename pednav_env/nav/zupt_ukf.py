@@ -31,9 +31,8 @@ Like filterpy 2.0 (the oracle), the measurement step uses sigma points redrawn
 from the prior (which includes Q), not the propagated ones the paper prints
 (which would leave Q out of S); with the linear h the update is then exactly
 the Kalman update on the unscented prior, which is how it is computed (no
-second draw; the filterpy oracle test checks the equality). The other choices
-the paper leaves open (Q, R, gating) are listed in
-:mod:`pednav_env.nav.zupt_config`.
+second draw; the filterpy oracle test checks the equality). The other open
+choices (Q, R, gating, angle-sum forms): :mod:`pednav_env.nav.zupt_config`.
 """
 
 from __future__ import annotations
@@ -206,6 +205,7 @@ class ZuptUkf:
             config.update_mode is UpdateMode.STANCE_BOUNDARIES,
             STATE_DIM + self.weights.lam,
             DIVERGENCE_SPEED,
+            config.angle_sums,
         )
 
     # ------------------------------------------------------------------ init
@@ -256,9 +256,9 @@ class ZuptUkf:
     def set_state(self, idx: NDArray[np.integer], x: Array, P: Array) -> None:
         """Set mean and covariance of walkers ``idx`` and draw their sigma points."""
         idx = np.asarray(idx, dtype=np.int64)
-        x = np.ascontiguousarray(x, dtype=float)
-        P = np.ascontiguousarray(P, dtype=float)
-        bad = redraw_sigmas(idx, x, P, self.settings.spread, self.sig_C, self.sig_v, self.sig_p)
+        x, P = np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(P, dtype=float)
+        st = self.settings
+        bad = redraw_sigmas(idx, x, P, st.spread, self.sig_C, self.sig_v, self.sig_p, st.angle_sums)
         self.repairs[idx] += bad
         self.x[idx], self.P[idx] = x, P
         self.elapsed_s[idx] = 0.0

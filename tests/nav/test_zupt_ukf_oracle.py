@@ -6,17 +6,18 @@ residual), the engine's Q for each interval and the same R, at the update
 instants the engine detected. Every prior and posterior must agree to 1e-8
 relative over a whole simulated walk, for both filter families: paper 003's
 (eq 5, ZUPTs at stance start and end) and the shoe family's action 0
-(``real-fixed``: SHOE detector, a ZUPT at every stance sample, its Q and R scales).
+(``real-fixed``: SHOE detector, a ZUPT at every stance sample, its Q and R scales;
+the sigma points' angles by the angle-sum forms of nav.sigma_angles).
 """
 
 import numpy as np
 import pytest
 
+from pednav_env.envs.foot_filters import family_filter
 from pednav_env.nav.alignment import align_static
 from pednav_env.nav.zupt_config import ZuptUkfConfig
 from pednav_env.nav.zupt_model import process_noise, propagate_state
 from pednav_env.nav.zupt_ukf import ZuptUkf
-from pednav_env.replay.setup import real_fixed_setup
 from pednav_env.sensors.imu import ImuSpec, simulate_imu
 from pednav_env.testing.reference_foot import filterpy_zupt_ukf, zupt_noise
 
@@ -37,7 +38,8 @@ def assert_close(actual, desired, what, rtol=1e-8):
     np.testing.assert_allclose(actual, desired, rtol=rtol, atol=rtol * scale, err_msg=what)
 
 
-FILTERS = {"paper": ZuptUkfConfig(), "shoe": real_fixed_setup().filter}
+#: The shoe family's filter is real-fixed's with the angle-sum forms (nav.sigma_angles).
+FILTERS = {"paper": ZuptUkfConfig(), "shoe": family_filter("shoe", "calibrated")}
 
 
 @pytest.mark.parametrize("family", FILTERS)
