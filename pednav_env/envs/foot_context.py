@@ -60,7 +60,7 @@ def interval_context(
     cursor: NDArray[np.integer],
     length: NDArray[np.integer],
     interval_samples: int,
-    dt: float,
+    dt: float | Array,
     grade_codes: NDArray[np.integer],
 ) -> Array:
     """Context rows ``(B, 3)`` of ``lanes`` (B,) whose next interval starts at

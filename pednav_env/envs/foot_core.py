@@ -228,6 +228,8 @@ class FootZuptCore:
         self.dt = 1.0 / config.rate_hz
         self.n_align = max(1, int(round(config.filter.alignment_s * config.rate_hz)))
         self.engine = ZuptUkf(config.filter, config.rate_hz, self.n)
+        #: Each lane's sample interval (s), the engine's (a recording's own rate).
+        self.lane_dt = self.engine.walker_dt
         cap = config.max_samples + self.k
         n = self.n
         self.omega = np.zeros((n, cap, 3))
@@ -253,7 +255,8 @@ class FootZuptCore:
         self.obs_low, self.obs_high = obs_bounds(OBS_FEATURES, config.action_dim)
         self.knobs = config.knobs
         det = config.filter.detector
-        self.shoe = ShoeStatistic(det, config.rate_hz) if self.engine.uses_shoe else None
+        rates = self.engine.walker_rate_hz  # per lane (the same array)
+        self.shoe = ShoeStatistic(det, rates) if self.engine.uses_shoe else None
         #: SHOE statistic window of each lane (s), set by the shoe family's knob.
         self.shoe_window_s = np.full(n, getattr(det, "window_s", np.nan))
 
@@ -322,7 +325,7 @@ class FootZuptCore:
             self.cursor[lanes],
             self.length[lanes],
             self.k,
-            self.dt,
+            self.lane_dt[lanes],
             self.grade_code[lanes],
         )
 
@@ -441,7 +444,7 @@ class FootZuptCore:
         for r in range(1, int(rank[:, -1].max(initial=0)) + 1):
             hit = end & (rank == r)
             col = hit.argmax(axis=1)
-            dur = before[self.lanes, col] * self.dt
+            dur = before[self.lanes, col] * self.lane_dt
             ok = hit.any(axis=1) & (dur > 0)
             avg = np.where(ok, np.where(avg > 0, 0.8 * avg + 0.2 * dur, dur), avg)
         self.stance_avg_s = avg

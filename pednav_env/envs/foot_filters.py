@@ -109,10 +109,11 @@ class ShoeStatistic:
 
     For lane i the statistic at sample m averages samples max(0, m − W_i + 1) … m
     of its record (the causal window of :func:`pednav_env.nav.detectors.shoe_statistic`,
-    Skog et al. 2010 eq 11), with W_i = ``window_s`` · rate in samples (≥ 1).
+    Skog et al. 2010 eq 11), with W_i = ``window_s`` · rate in samples (≥ 1);
+    ``rate_hz`` is one rate or each lane's, ``(N,)``.
     """
 
-    def __init__(self, detector: ShoeDetectorConfig, rate_hz: float) -> None:
+    def __init__(self, detector: ShoeDetectorConfig, rate_hz: float | Array) -> None:
         self.detector = detector
         self.rate_hz = rate_hz
 

@@ -82,7 +82,8 @@ class FootZuptReplayEnv(ReplayFront, FootZuptEnv):
 
     An episode is one whole trial, chosen by the reset seed (uniformly) from
     the recordings in ``data_dir`` (``.mat`` PyShoe trials or CSV files with
-    truth columns, :mod:`pednav_env.io`; all at one sample rate; a recording
+    truth columns, :mod:`pednav_env.io`; each at its own rate, with the same
+    number of samples per decision interval; a recording
     without a truth track, e.g. a footprint-only hallway walk, is refused
     naming it). With ``trial_order="sequential"`` the episode of seed s plays
     trial (s − ``first_trial_seed``) mod n of the n recordings sorted by name,

@@ -37,7 +37,12 @@ from pednav_env.envs.spec import require_nonnegative, require_positive
 from pednav_env.io.load import find_recordings, load_recording
 from pednav_env.io.recording import Recording
 from pednav_env.io.validate import LoadOptions
-from pednav_env.nav.detectors import causal_moving_mean, window_samples
+from pednav_env.nav.detectors import (
+    ShoeDetectorConfig,
+    causal_moving_mean,
+    detector_window,
+    window_samples,
+)
 from pednav_env.nav.zupt_config import ZuptUkfConfig
 from pednav_env.replay.metrics import best_rotation, rotate_h
 from pednav_env.replay.runner import PreparedRecording, prepare, run_prepared
@@ -69,7 +74,8 @@ class FootReplayConfig:
     """Settings of the replay environment.
 
     ``data_dir``: a directory of recordings with truth (``.mat``/``.csv``,
-    see :mod:`pednav_env.io`), all at one sample rate (±1 %); required by the
+    see :mod:`pednav_env.io`), each played at its own rate, whose decision
+    interval is the same number of samples for all; required by the
     environments (the core can also replay in-memory recordings).
     ``filter_family`` (``gym.make`` argument ``filter``): ``"paper"`` or
     ``"shoe"`` (:mod:`pednav_env.envs.foot_filters`).
@@ -216,15 +222,11 @@ class FootReplayCore(FootZuptCore):
         if not self.paths:
             raise ValueError(f"{config.data_dir}: no recordings (.mat, .csv) found")
         self.trials: dict[int, Trial] = {}
-        rate, self.capacity = self._peek(0, env_name)
-        for i in range(1, len(self.paths)):
-            rec_rate, samples = self._peek(i, env_name)
-            if abs(rec_rate - rate) > 0.01 * rate:
-                raise ValueError(
-                    f"{env_name}: recordings at different rates: {self.paths[0].name} "
-                    f"{rate:.1f} Hz, {self.paths[i].name} {rec_rate:.1f} Hz"
-                )
-            self.capacity = max(self.capacity, samples)
+        peeks = [self._peek(i, env_name) for i in range(len(self.paths))]
+        rate = peeks[0][0]
+        self.capacity = max(samples for _, samples in peeks)
+        for i, (rec_rate, _) in enumerate(peeks):
+            self._check_rate(i, rec_rate, rate, env_name)
         foot = FootZuptConfig(
             decision_interval_s=config.decision_interval_s,
             rate_hz=rate,
@@ -263,6 +265,25 @@ class FootReplayCore(FootZuptCore):
             )
         nominal, steps = grid_steps(rec.time)
         return 1.0 / nominal, int(steps.sum()) + 1
+
+    def _check_rate(self, i: int, rec_rate: float, rate: float, env_name: str) -> None:
+        """Recording i plays at its own rate (the filter's sample interval per lane),
+        but the lanes step together: a decision interval must be the same number of
+        samples as recording 0's, and so must the eq-5 detector window; ValueError
+        naming both recordings and their rates otherwise."""
+        cfg = self.replay_config
+        k0, k = (max(1, round(cfg.decision_interval_s * r)) for r in (rate, rec_rate))
+        det = cfg.setup.filter.detector
+        same_window = isinstance(det, ShoeDetectorConfig) or detector_window(
+            det, rec_rate
+        ) == detector_window(det, rate)
+        if k != k0 or not same_window:
+            raise ValueError(
+                f"{env_name}: recordings at different rates: {self.paths[0].name} "
+                f"{rate:.1f} Hz, {self.paths[i].name} {rec_rate:.1f} Hz (a decision "
+                f"interval of {cfg.decision_interval_s:g} s is {k0} and {k} samples; the "
+                "lanes step by one number of samples): put them in separate folders"
+            )
 
     def _recording(self, i: int) -> Recording:
         if self.recordings is not None:
@@ -304,6 +325,7 @@ class FootReplayCore(FootZuptCore):
             self.load_lane(lane, p.omega_b, p.f_b, tr.pos_n, tr.stance, tr.distance_m)
             self.grade[lane] = "recorded"
             self.grade_code[lane] = grade_code("recorded")
+            self.engine.set_rate(np.array([lane]), p.rate_hz)  # its own sample interval
             self.trial_index[lane] = i
             self.trial_name[lane] = tr.name
             self.heading_offset[lane] = tr.heading_offset_rad

@@ -92,7 +92,6 @@ KIND_START, KIND_END, KIND_STANCE = 0, 1, 2
 class KernelSettings(NamedTuple):
     """Constants shared by all walkers."""
 
-    dt: float  # s, sample interval
     g: float  # m/s², gravity of the strapdown
     detector_g: float  # m/s², the g of eq (5)
     gate_nis: float  # χ² gate on the NIS of a ZUPT (inf: no gate)
@@ -106,6 +105,7 @@ class KernelSettings(NamedTuple):
 class WalkerKnobs(NamedTuple):
     """Per-walker settings, arrays over N walkers (the agent's knobs among them)."""
 
+    dt: np.ndarray  # (N,) s, sample interval (each walker's own rate: recordings)
     omega_max: np.ndarray  # (N,) rad/s, eq (5)
     delta_f_max: np.ndarray  # (N,) m/s², eq (5)
     min_stance_samples: np.ndarray  # (N,) int, minimum stance duration
@@ -383,7 +383,7 @@ def advance_walker(
 ) -> int:
     """Walker i through the block (module docstring). Returns the next log row."""
     # walker i's arrays, out of the tuples once: the sample loop passes no tuple (module doc)
-    k, dt, g = block.omega.shape[1], s.dt, s.g
+    k, dt, g = block.omega.shape[1], knobs.dt[i], s.g
     omega, f, bias, valid = block.omega[i], block.f[i], knobs.gyro_bias[i], block.valid[i]
     shoe_condition = block.shoe_cond[i]
     moving = not block.frozen[i]

@@ -139,6 +139,7 @@ class ZuptUkf:
     Tunable per walker, at any time (the agent's knobs): ``omega_max``,
     ``delta_f_max`` (eq-5 detector) or ``shoe_threshold``, ``min_stance_s``,
     ``process_noise_scale``, ``zupt_noise_scale`` — arrays of shape (N,).
+    Per walker too: the sample rate (:meth:`set_rate`; Q's basis stays at ``rate_hz``).
     """
 
     def __init__(
@@ -156,6 +157,8 @@ class ZuptUkf:
         self.rate_hz = float(rate_hz)
         self.dt = 1.0 / self.rate_hz
         self.n = n = int(num_walkers)
+        self.walker_rate_hz = np.full(n, self.rate_hz)
+        self.walker_dt = np.full(n, self.dt)
         self.weights = config.weights
         #: R at zupt_noise_scale = 1: diag(σ_h², σ_v², σ_v², σ_v²).
         self.zupt_noise_base = np.diag(
@@ -197,7 +200,6 @@ class ZuptUkf:
             process_noise_basis(config.assumed_imu, self.rate_hz), self.weights.Wm, self.weights.Wc
         )
         self.settings = KernelSettings(
-            self.dt,
             float(config.g),
             float(det.g),
             np.inf if self.gate_nis is None else self.gate_nis,
@@ -207,6 +209,14 @@ class ZuptUkf:
             DIVERGENCE_SPEED,
             config.angle_sums,
         )
+
+    def set_rate(self, idx: NDArray[np.integer], rate_hz: float) -> None:
+        """Walkers ``idx`` sample at ``rate_hz`` (eq 5's window keeps its samples)."""
+        det, window = self.config.detector, detector_window
+        if not self.uses_shoe and window(det, rate_hz) != window(det, self.rate_hz):
+            raise ValueError(f"{rate_hz} Hz: the detector window differs from {self.rate_hz} Hz")
+        self.walker_rate_hz[idx] = float(rate_hz)
+        self.walker_dt[idx] = 1.0 / float(rate_hz)
 
     # ------------------------------------------------------------------ init
     def initial_state(self, euler0: Array) -> tuple[Array, Array]:
@@ -309,8 +319,9 @@ class ZuptUkf:
         self.updates[:], self.rejected[:], self.repairs[:] = counters.T
         self.stance_starts += out.start.sum(axis=1)
         upd = out.last_accepted >= 0
+        dt = self.walker_dt
         self.time_since_update_s = np.where(
-            upd, (k - out.last_accepted) * self.dt, self.time_since_update_s + k * self.dt
+            upd, (k - out.last_accepted) * dt, self.time_since_update_s + k * dt
         )
         self._keep_log(log, n_log)
         self.sample += k
@@ -351,9 +362,10 @@ class ZuptUkf:
     def _knobs(self) -> WalkerKnobs:
         """The per-walker settings as the kernel reads them."""
         return WalkerKnobs(
+            self.walker_dt,
             np.asarray(self.omega_max, dtype=float),
             np.asarray(self.delta_f_max, dtype=float),
-            min_stance_samples(self.min_stance_s, self.rate_hz),
+            min_stance_samples(self.min_stance_s, self.walker_rate_hz),
             np.asarray(self.process_noise_scale, dtype=float),
             self.zupt_noise_base[0, 0] * self.zupt_noise_scale,
             self.zupt_noise_base[1, 1] * self.zupt_noise_scale,

@@ -61,6 +61,56 @@ def test_bad_data_directories():
         gym.make(ENV_ID, data_dir=str(REPLAY_DATA), trial_order="shuffled")
 
 
+def test_recordings_whose_intervals_differ_in_samples_are_refused(tmp_path):
+    """200 Hz and 100 Hz walks: a 0.5 s decision interval is 100 and 50 samples, and the
+    lanes step together, so the folder is refused naming both files and rates."""
+    from pednav_env.replay.simulate import SimulateConfig, simulate_walk, write_recording_csv
+
+    for name, rate in (("a200", 200.0), ("b100", 100.0)):
+        walk = simulate_walk(SimulateConfig(duration_s=5.0, rate_hz=rate))
+        write_recording_csv(walk, tmp_path / f"{name}.csv")
+    with pytest.raises(ValueError, match=r"a200\.csv 200\.0 Hz, b100\.csv 100\.0 Hz") as exc:
+        gym.make(ENV_ID, data_dir=str(tmp_path))
+    assert "100 and 50 samples" in str(exc.value)
+
+
+def test_each_recording_plays_at_its_own_rate(tmp_path):
+    """A recording whose clock runs 0.03 % slow (as PyShoe trials differ: 200.009 to
+    200.151 Hz) plays at its own rate beside one at the original rate: each episode
+    equals that recording replayed alone (the filter's sample interval is per lane)."""
+    import scipy.io
+
+    src = next(REPLAY_DATA.glob("*.mat"))
+    data = scipy.io.loadmat(src)
+    (tmp_path / "a.mat").write_bytes(src.read_bytes())
+    data["ts"] = data["ts"] * (1.0 + 3e-4)
+    scipy.io.savemat(tmp_path / "b.mat", {k: v for k, v in data.items() if k[0] != "_"})
+
+    def errors(folder, n):
+        env = gym.make_vec(
+            ENV_ID,
+            n,
+            vectorization_mode="vector_entry_point",
+            data_dir=str(folder),
+            trial_order="sequential",
+        )
+        env.reset(seed=0)
+        total, done = np.zeros(n), np.zeros(n, dtype=bool)
+        while not done.all():
+            _, r, term, trunc, _ = env.step(np.zeros((n, 4), np.float32))
+            total += np.where(done, 0.0, r)
+            done |= term | trunc
+        return -total
+
+    both = errors(tmp_path, 2)
+    assert abs(both[0] - both[1]) > 1e-4  # the clocks differ enough to tell
+    for i, name in enumerate(("a", "b")):
+        alone = tmp_path / name
+        alone.mkdir()
+        (alone / f"{name}.mat").write_bytes((tmp_path / f"{name}.mat").read_bytes())
+        np.testing.assert_allclose(errors(alone, 1)[0], both[i], rtol=1e-9)
+
+
 def test_sequential_order_plays_every_recording_once_in_name_order(three_recordings):
     """trial_order="sequential": seed s plays recording (s − first_trial_seed) mod n of the
     sorted names, a lane's next episode the next one; lane i of a vector env seeded s
