@@ -23,11 +23,12 @@ shipped one): the objective against the constant it started from, in sample.
 ``tuned`` and against the shipped rule (paired t-test), and, from ``--dev`` (the
 output of ``pednav evaluate pednav/FootZupt-v0 --policy tuned gait-rule S1.json …
 --json``, policies named by the paths given; ``gait-rule`` there is ``--shipped``),
-its development mean, divergence and paired difference against ``tuned``; then the
-mean ± sd over the searches (files whose record has ``averaged_from`` are shown but
-not counted) and the selection rule of docs/RESULTS.md applied to the
-re-evaluations only: the lowest re-evaluated mean replaces the shipped rule only if
-it beats it there at paired p < 0.05. Nothing is replayed by ``table``.
+its development mean, divergence and paired difference against ``tuned`` (— for the
+shipped rule when the evaluation has no ``gait-rule``); then the mean ± sd over the
+searches (files whose record has ``averaged_from`` are shown but not counted) and
+the selection rule of docs/RESULTS.md applied to the re-evaluations only: the lowest
+re-evaluated mean replaces the shipped rule only if it beats it there at paired
+p < 0.05. Nothing is replayed by ``table``.
 """
 
 from __future__ import annotations
@@ -182,10 +183,12 @@ def table(paths: list[str], shipped: str, dev_path: str | None, markdown: bool) 
         counted = r is not ship and "averaged_from" not in r
         if counted:
             gains_re.append(d_t)
-        if dev:
-            key = str(Path(r["path"]).resolve())
-            if key not in rows_dev:
+        key = str(Path(r["path"]).resolve())
+        if dev and key not in rows_dev:
+            if r is not ship:
                 raise ValueError(f"{dev_path}: no policy named {r['path']}")
+            row += ["—"] * 6  # the shipped rule was not played (no gait-rule policy)
+        elif dev:
             e = np.asarray(rows_dev[key]["episode_errors"])
             dd, pd, pw = paired(e, tuned_dev)
             row += [

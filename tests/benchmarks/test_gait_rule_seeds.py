@@ -96,6 +96,19 @@ def test_dev_columns_count_searches_that_beat_tuned(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "dev Δ vs tuned -0.500 ± 0.707 m" in out.stdout
     assert "1 of 2 beat tuned at p < 0.01" in out.stdout
+    # without the shipped rule in the evaluation its dev cells are empty; a search
+    # missing from it is an error
+    dev["policies"] = [p for p in dev["policies"] if p["name"] != "gait-rule"]
+    path.write_text(json.dumps(dev))
+    out = run("table", a, b, "--shipped", shipped, "--dev", str(path))
+    assert out.returncode == 0, out.stderr
+    assert "dev Δ vs tuned -0.500 ± 0.707 m" in out.stdout
+    shipped_row = next(line for line in out.stdout.splitlines() if line.startswith("shipped"))
+    assert shipped_row.endswith("  ".join(["—"] * 6))
+    dev["policies"] = [p for p in dev["policies"] if p["name"] != b]
+    path.write_text(json.dumps(dev))
+    out = run("table", a, b, "--shipped", shipped, "--dev", str(path))
+    assert out.returncode == 2 and f"no policy named {b}" in out.stderr
 
 
 def test_records_on_other_episodes_are_refused_in_one_line(tmp_path):
