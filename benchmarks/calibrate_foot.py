@@ -105,7 +105,12 @@ def run_part(part: str, stats: list[WalkStats], args: argparse.Namespace) -> dic
     train = stats if part == "all" else [s for g, v in folds.items() if g != part for s in v]
     log = lambda gen, best: print(f"  [{part}] generation {gen}: best {best:.4f}", flush=True)  # noqa: E731
     t0 = time.perf_counter()
-    result = fit(train, args.walks, args.max_evaluations, args.seed, args.popsize, log)
+    x0 = None
+    if args.warm_start:
+        x0 = json.loads(Path(args.warm_start).read_text())["parts"][part]["fit"]["x"]
+    result = fit(
+        train, args.walks, args.max_evaluations, args.seed, args.popsize, log, x0, args.sigma0
+    )
     out = {
         "train": sorted(s.name for s in train),
         "bands_trained": [int(k) for k in by_band(train)],
@@ -147,6 +152,13 @@ def main() -> None:
     ap.add_argument("--max-evaluations", type=int, default=1000, help="CMA-ES budget per fit")
     ap.add_argument("--popsize", type=int, default=12, help="CMA-ES population")
     ap.add_argument("--seed", type=int, default=7, help="fit seed (not sim2real's)")
+    ap.add_argument("--sigma0", type=float, default=0.2, help="CMA-ES step in the unit box")
+    ap.add_argument(
+        "--warm-start",
+        metavar="JSON",
+        help="start each part from the same part's parameters in this earlier output "
+        "(a fold's start then never saw its held-out group)",
+    )
     ap.add_argument("--merge", nargs="+", metavar="JSON", help="join the outputs of parts")
     ap.add_argument(
         "--recheck",
@@ -174,6 +186,8 @@ def main() -> None:
     else:
         stats = load_stats(args)
         result["settings"] = {
+            "warm_start": args.warm_start,
+            "sigma0": args.sigma0,
             "walks": args.walks,
             "max_evaluations": args.max_evaluations,
             "popsize": args.popsize,

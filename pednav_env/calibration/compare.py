@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.stats import wasserstein_distance
 
 from pednav_env.calibration.sources import samples_from_simulation
@@ -184,6 +185,21 @@ class BandComparison:
         }
 
 
+def stride_quietness_by_bin(walks: Sequence[WalkStats]) -> dict[int, NDArray[np.float64]]:
+    """The walks' per-stride quietness (5th percentile of log10 SHOE) by index
+    into :data:`SPEED_BANDS` of the stride's own speed (strides without a
+    speed or a quietness dropped)."""
+    speed = np.concatenate([w.strides.speed_mps for w in walks]) if walks else np.zeros(0)
+    p5 = np.concatenate([w.strides.log_shoe_p5 for w in walks]) if walks else np.zeros(0)
+    keep = np.isfinite(speed) & np.isfinite(p5)
+    out = {}
+    for k, (lo, hi) in enumerate(SPEED_BANDS):
+        m = keep & (speed >= lo) & (speed < hi)
+        if m.any():
+            out[k] = p5[m]
+    return out
+
+
 def _cell(value: float | None) -> str:
     return "  -  " if value is None else f"{value:5.2f}"
 
@@ -226,7 +242,32 @@ class Sim2RealReport:
             "max_envelope_excess_decades": round(max(excess), 3) if excess else None,
             "bands": [b.to_json() for b in self.bands],
             "unbanded": [s.summary() for s in self.unbanded],
+            "strides": self.stride_rows(),
         }
+
+    def stride_rows(self) -> list[dict[str, Any]]:
+        """Per stride-speed bin holding recorded strides: counts, median and
+        10–90 % of the strides' quietness, recordings and simulator, and the W1
+        between them (decades)."""
+        real = stride_quietness_by_bin([s for b in self.bands for s in b.real])
+        sim = stride_quietness_by_bin([s for b in self.bands for s in b.sim])
+        rows = []
+        for k, r in real.items():
+            m = sim.get(k, np.zeros(0))
+            q = lambda a, p: round(float(np.percentile(a, p)), 3) if a.size else None  # noqa: E731
+            rows.append(
+                {
+                    "band_mps": band_label(SPEED_BANDS[k]),
+                    "real_strides": int(r.size),
+                    "real_median": q(r, 50),
+                    "real_p10_p90": [q(r, 10), q(r, 90)],
+                    "sim_strides": int(m.size),
+                    "sim_median": q(m, 50),
+                    "sim_p10_p90": [q(m, 10), q(m, 90)],
+                    "w1": round(float(wasserstein_distance(r, m)), 3) if m.size else None,
+                }
+            )
+        return rows
 
     def format_text(self) -> str:
         lines = [f"simulator model: {self.model}"]
@@ -258,6 +299,21 @@ class Sim2RealReport:
                     for a in WALK_SHAPE
                 ]
                 lines.append(f"{band_label(b.band):10s}  " + "   ".join(cells))
+        rows = self.stride_rows()
+        if rows:
+            lines.append(
+                "per stride, by stride speed: quietness (p5 of log10 SHOE), real / sim: "
+                "strides, median, 10-90 %, W1"
+            )
+            for r in rows:
+                span = lambda a: "    -      " if a[0] is None else f"{a[0]:5.2f}-{a[1]:5.2f}"  # noqa: E731
+                med = lambda v: "  -  " if v is None else f"{v:5.2f}"  # noqa: E731
+                lines.append(
+                    f"{r['band_mps']:10s}  {r['real_strides']:4d} / {r['sim_strides']:<5d} "
+                    f"{med(r['real_median'])} / {med(r['sim_median'])}   "
+                    f"{span(r['real_p10_p90'])} / {span(r['sim_p10_p90'])}   "
+                    f"{'  -' if r['w1'] is None else format(r['w1'], '.2f')}"
+                )
         for s in self.unbanded:
             lines.append(f"{s.name}: no walking speed in a band (speed source {s.speed_source})")
         return "\n".join(lines)

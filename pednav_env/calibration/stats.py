@@ -11,8 +11,9 @@ What the simulator is compared on (docs/SIM_TO_REAL.md):
 - the **walking speed**: horizontal path length over the time not spent
   standing (truth positions), or the footprint path length over the walking
   time between the first and the last footprint;
-- **per stride**: speed, stance duration, and the medians of |ω| (rad/s) and
-  ||f| − g| (m/s²) in stance and in swing;
+- **per stride**: speed, stance duration, the medians of |ω| (rad/s) and
+  ||f| − g| (m/s²) in stance and in swing, and the 5th percentile of log10
+  SHOE over the stride (the threshold a detector needs to see its stance);
 - the **quiet phase**, measured the same way on every walk whatever its
   labels: the runs of the walking part whose log10 SHOE lies below the
   midpoint between the walk's own p10 and p50 (the detector rule below),
@@ -66,6 +67,8 @@ DETECTOR_STAND_LOG10 = 6.0
 #: Label cleaning for stance durations: gaps and runs shorter than this (s) are
 #: closed / dropped (PyShoe's VICON labels flicker at mid-stance edges).
 LABEL_MIN_RUN_S = 0.05
+#: Per stride, the percentile of log10 SHOE reported as its quietness (%).
+STRIDE_QUIET_PERCENT = 5.0
 
 
 class StanceSource(StrEnum):
@@ -149,9 +152,10 @@ class StrideStats:
     """Per-stride arrays, one entry per stride (strides overlapping a stand dropped).
 
     A stride runs from one stance start (or footprint) to the next.
-    ``speed_mps`` is NaN without truth or footprints; ``stance_s`` is the
-    first stance run starting in the stride; the medians are over the
-    stride's stance and swing samples (NaN if there are none).
+    ``speed_mps`` is NaN without truth or footprints (the stride's path over
+    its duration); ``stance_s`` is the first stance run starting in the
+    stride; the medians are over the stride's stance and swing samples (NaN if
+    there are none); ``log_shoe_p5`` is its quietest 5 %.
     """
 
     start_s: Array
@@ -162,6 +166,10 @@ class StrideStats:
     stance_accel_dev_median: Array  # ||f| − g|, m/s²
     swing_gyro_median: Array
     swing_accel_dev_median: Array
+    #: 5th percentile of log10 SHOE over the stride's samples (NaN under 10
+    #: finite samples): the SHOE threshold log10 γ must exceed it for 5 % of the
+    #: stride to be detected as stance; it needs no labels.
+    log_shoe_p5: Array
 
     @property
     def count(self) -> int:
@@ -246,6 +254,7 @@ class WalkStats:
             "stance_accel_dev_median_m_s2": med(st.stance_accel_dev_median),
             "swing_gyro_median_rad_s": med(st.swing_gyro_median),
             "swing_accel_dev_median_m_s2": med(st.swing_accel_dev_median),
+            "stride_log_shoe_p5_median": med(st.log_shoe_p5),
         }
 
 
@@ -357,7 +366,7 @@ def walk_stats(samples: WalkSamples, per_stride: bool = True) -> WalkStats:
     elif s.truth_pos is not None and walking_s > 0:
         speed_source = SpeedSource.TRUTH
         speed = _path_length(np.asarray(s.truth_pos, dtype=float), walking) / walking_s
-    strides = _stride_stats(s, stance, stand, rate) if per_stride else _no_strides()
+    strides = _stride_stats(s, stance, stand, log_t, rate) if per_stride else _no_strides()
     return WalkStats(
         name=s.name,
         rate_hz=rate,
@@ -372,10 +381,12 @@ def walk_stats(samples: WalkSamples, per_stride: bool = True) -> WalkStats:
 
 
 def _no_strides() -> StrideStats:
-    return StrideStats(*np.zeros((8, 0)))
+    return StrideStats(*np.zeros((9, 0)))
 
 
-def _stride_stats(s: WalkSamples, stance: Flags, stand: Flags, rate: float) -> StrideStats:
+def _stride_stats(
+    s: WalkSamples, stance: Flags, stand: Flags, log_t: Array, rate: float
+) -> StrideStats:
     """Per-stride statistics; strides from footprints or from clean stance starts."""
     n = stance.size
     clean = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
@@ -402,6 +413,8 @@ def _stride_stats(s: WalkSamples, stance: Flags, stand: Flags, rate: float) -> S
         first = np.flatnonzero((starts >= a) & (starts < b))
         stance_s = float(ends[first[0]] - starts[first[0]]) / rate if first.size else float("nan")
         st = clean[a:b]
+        quiet = log_t[a:b][np.isfinite(log_t[a:b])]
+        p5 = float(np.percentile(quiet, STRIDE_QUIET_PERCENT)) if quiet.size >= 10 else np.nan
         rows.append(
             (
                 a / rate,
@@ -412,7 +425,8 @@ def _stride_stats(s: WalkSamples, stance: Flags, stand: Flags, rate: float) -> S
                 _median(accel_dev[a:b][st]),
                 _median(gyro[a:b][~st]),
                 _median(accel_dev[a:b][~st]),
+                p5,
             )
         )
-    cols = np.array(rows, dtype=float).reshape(-1, 8).T
+    cols = np.array(rows, dtype=float).reshape(-1, 9).T
     return StrideStats(*cols)

@@ -11,14 +11,18 @@ from agents.choose_shoe import errors_by_recording, simulated_recordings
 from pednav_env.calibration.compare import MODELS, SimModel
 from pednav_env.calibration.fit import (
     GRADE,
+    MISSING_BIN_DECADES,
     NAMES,
     START,
     band_distance,
+    coverage_distance,
     distance,
     groups,
     pooled_w1,
     randomization,
+    stride_distance,
 )
+from pednav_env.calibration.stats import SpeedSource, StanceSource, StrideStats, WalkStats
 from pednav_env.replay.setup import real_fixed_setup
 
 
@@ -30,6 +34,41 @@ def test_pooled_w1_matches_scipy() -> None:
     # samples of this spread (its error is the quantile function's variation within
     # one 1/400 step, largest in the tails); a wrong sign or scale is off by ≥ 0.5
     assert pooled_w1(a, b) == pytest.approx(wasserstein_distance(a, b), abs=1e-2)
+
+
+def _walk(level: float, stride_speeds: list[float] = (), stride_p5: list[float] = ()) -> WalkStats:
+    """A walk whose log10 SHOE is ``level`` throughout (p10 = p50 = level) and
+    whose strides have the given speeds and quietness."""
+    n = len(stride_speeds)
+    cols = [np.zeros(n)] * 2 + [np.asarray(stride_speeds, float)] + [np.zeros(n)] * 5
+    return WalkStats(
+        "w",
+        200.0,
+        StanceSource.LABELS,
+        SpeedSource.TRUTH,
+        1.0,
+        10.0,
+        0.0,
+        np.full(100, level),
+        StrideStats(*cols, np.asarray(stride_p5, float)),
+    )
+
+
+def test_coverage_distance_hand_computed() -> None:
+    sim = [_walk(float(v)) for v in range(21)]  # 5–95 % of 0, 1, …, 20 is [1, 19]
+    # inside: 0; at 25: 6 decades above on p10 and on p50; at 0.5: 0.5 below on each
+    assert coverage_distance([_walk(10.0)], sim) == 0.0
+    assert coverage_distance([_walk(25.0), _walk(0.5)], sim) == pytest.approx((12 + 1) / 2)
+
+
+def test_stride_distance_by_stride_speed_bin() -> None:
+    # 12 recorded strides at 1 m/s (bin 0.8–1.3) quietness 6.0, 12 at 2 m/s (bin
+    # 1.8–2.6) at 8.0, and 5 at 0.5 m/s: too few for a bin of their own.
+    real = [_walk(0.0, [1.0] * 12 + [2.0] * 12 + [0.5] * 5, [6.0] * 12 + [8.0] * 12 + [5.0] * 5)]
+    # the simulator 0.5 decades louder at 1 m/s, no stride at 2 m/s
+    sim = [_walk(0.0, [1.1] * 30, [6.5] * 30)]
+    out = stride_distance(real, sim)
+    assert out == {1: pytest.approx(0.5), 3: MISSING_BIN_DECADES}
 
 
 def test_groups_split_by_session_and_place() -> None:

@@ -94,6 +94,30 @@ def test_walk_stats_from_labels_hand_computed() -> None:
     assert st.stance_gyro_median == pytest.approx(np.full(4, W_STANCE))
     assert st.swing_gyro_median == pytest.approx(np.full(4, W_SWING))
     assert st.stance_accel_dev_median == pytest.approx(np.zeros(4), abs=1e-12)
+    # a stride (stance start to stance start: 80 stance then 120 swing samples) holds
+    # at least 76 pure-stance samples, 38 % of it: its 5th percentile is stance's
+    assert st.log_shoe_p5 == pytest.approx(
+        np.full(4, 2 * math.log10(W_STANCE / SHOE_GYRO_SIGMA)), abs=1e-9
+    )
+
+
+def test_stride_quietness_is_the_quietest_five_percent() -> None:
+    # The second stride's stance shortened to 12 samples (longer than the label
+    # cleaning's 10): with the window's 4-sample mixing only 8 pure stance samples of
+    # the stride's 200 remain (4 %), so its 5th percentile sits above the stance
+    # level, in the mixed samples; the other strides keep theirs.
+    omega_b, f_b, stance, pos = _hand_walk()
+    first = STAND + SWING  # the first walking stance
+    second = first + STANCE + SWING
+    omega_b[second + 12 : second + STANCE, 0] = W_SWING
+    stance[second + 12 : second + STANCE] = False
+    s = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos))
+    p5 = s.strides.log_shoe_p5
+    stance_level = 2 * math.log10(W_STANCE / SHOE_GYRO_SIGMA)
+    assert p5.size == STRIDES - 1
+    assert p5[1] > stance_level + 0.5
+    others = np.delete(p5, 1)
+    assert others == pytest.approx(np.full(p5.size - 1, stance_level), abs=1e-9)
 
 
 def test_a_stand_split_by_a_label_flicker_is_still_a_stand() -> None:
