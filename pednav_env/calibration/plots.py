@@ -3,16 +3,25 @@
 One PNG per speed band with recordings, ``sim2real_<band>.png``: histograms
 of log10 SHOE over the walking part, recordings pooled against simulated
 walks pooled, with each recording's p10 and p50 as ticks and the simulator's
-5–95 % envelopes of p10 and p50 as shaded spans.
+5–95 % envelopes of p10 and p50 as shaded spans; and
+``sim2real_<model>_strides.png``: per stride-speed bin, the strides'
+quietness (5th percentile of log10 SHOE over the stride), recordings beside
+the simulator (box plots: quartiles, 5–95 % whiskers).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from pednav_env.calibration.compare import Sim2RealReport, band_label
+from pednav_env.calibration.compare import (
+    SPEED_BANDS,
+    Sim2RealReport,
+    band_label,
+    stride_quietness_by_bin,
+)
 
 
 def write_figures(report: Sim2RealReport, directory: str | Path) -> list[Path]:
@@ -56,4 +65,45 @@ def write_figures(report: Sim2RealReport, directory: str | Path) -> list[Path]:
         fig.savefig(path, dpi=110)
         plt.close(fig)
         paths.append(path)
+    stride_path = _stride_figure(report, out_dir, plt)
+    if stride_path is not None:
+        paths.append(stride_path)
     return paths
+
+
+def _stride_figure(report: Sim2RealReport, out_dir: Path, plt: Any) -> Path | None:
+    """The per-stride quietness by stride speed (module docstring)."""
+    real = stride_quietness_by_bin([s for b in report.bands for s in b.real])
+    sim = stride_quietness_by_bin([s for b in report.bands for s in b.sim])
+    keys = [k for k in real if k in sim]
+    if not keys:
+        return None
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    pos = np.arange(len(keys), dtype=float)
+    style = {"whis": (5, 95), "showfliers": False, "widths": 0.32, "patch_artist": True}
+    for offset, data, color, label in (
+        (-0.18, real, "tab:blue", "recorded"),
+        (0.18, sim, "tab:orange", "simulated"),
+    ):
+        box = ax.boxplot([data[k] for k in keys], positions=pos + offset, **style)
+        for patch in box["boxes"]:
+            patch.set_facecolor(color)
+            patch.set_alpha(0.55)
+        ax.plot([], [], color=color, lw=6, alpha=0.55, label=label)
+    ax.set_xticks(pos)
+    ax.set_xticklabels(
+        [f"{band_label(SPEED_BANDS[k])}\n{real[k].size} / {sim[k].size}" for k in keys], fontsize=8
+    )
+    ax.set_xlabel("stride speed (m/s); strides recorded / simulated")
+    ax.set_ylabel("stride quietness: p5 of log10 SHOE")
+    ax.set_title(
+        f"{report.model}: the SHOE threshold log10 γ a stride needs (box: quartiles, "
+        "whiskers 5-95 %)",
+        fontsize=8,
+    )
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = out_dir / f"sim2real_{report.model}_strides.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

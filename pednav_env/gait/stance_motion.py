@@ -232,28 +232,30 @@ class StanceRandomization:
 
     @classmethod
     def calibrated(cls) -> StanceRandomization:
-        """The values fitted to the 31 development recordings (CMA-ES, 84
-        generations of 12, ``benchmarks/calibrate_foot.py``; docs/SIM_TO_REAL.md),
-        rounded to 3 digits."""
+        """The values fitted to the 31 development recordings
+        (``benchmarks/calibrate_foot.py``; docs/SIM_TO_REAL.md), rounded to 3
+        digits: the second fit, whose distance adds the per-stride quietness by
+        stride speed and the coverage of each recording (CMA-ES, 31 generations
+        of 12 warm-started from the first fit's values)."""
         return cls(
             quiet_log10_mean=-2.34,
-            quiet_log10_std=0.216,
-            quiet_speed_exponent=0.951,
-            edge_log10_mean=-2.88,
-            edge_log10_std=0.411,
-            edge_speed_exponent=3.43,
-            tau_hs_s=0.115,
-            tau_ho_s=0.0835,
-            roll_rad=0.00049,
+            quiet_log10_std=0.235,
+            quiet_speed_exponent=0.79,
+            edge_log10_mean=-3.49,
+            edge_log10_std=0.366,
+            edge_speed_exponent=3.76,
+            tau_hs_s=0.19,
+            tau_ho_s=0.0321,
+            roll_rad=0.000623,
             roll_speed_exponent=1.0,
             roll_fraction=0.3,
             stance_spread_log10=0.2,
-            flat_fraction=0.295,
-            flat_fraction_std=0.0494,
-            flat_speed_slope=-0.045,
-            heel_fraction=0.199,
-            swing_pitch_scale=1.36,
-            swing_pitch_log10_std=0.079,
+            flat_fraction=0.296,
+            flat_fraction_std=0.047,
+            flat_speed_slope=-0.0718,
+            heel_fraction=0.188,
+            swing_pitch_scale=1.37,
+            swing_pitch_log10_std=0.0805,
         )
 
     def draw(self, rng: np.random.Generator) -> StanceMotion:

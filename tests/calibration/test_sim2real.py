@@ -95,5 +95,7 @@ def test_cli_sim2real_bad_input_is_one_line(
 
 def test_cli_sim2real_plot(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["sim2real", str(PYSHOE_SAMPLE), "--walks", "3", "--plot", str(tmp_path)]) == 0
-    assert list(tmp_path.glob("sim2real_calibrated_*.png"))
-    assert "covered" in capsys.readouterr().out
+    assert list(tmp_path.glob("sim2real_calibrated_0*.png"))  # a band's histogram
+    assert (tmp_path / "sim2real_calibrated_strides.png").exists()
+    out = capsys.readouterr().out
+    assert "covered" in out and "per stride, by stride speed" in out
