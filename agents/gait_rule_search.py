@@ -30,6 +30,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -107,13 +108,7 @@ def search(
         print(f"generation {g + 1}/{generations}: best {scores.min():.3f} m", file=sys.stderr)
     best = np.clip(np.asarray(es.result.xbest), -1, 1)
     c = to_params(best)
-    params = GaitRuleParams(
-        c=tuple(float(v) for v in c),
-        feature=base.feature,
-        feature_ref=base.feature_ref,
-        feature_eps=base.feature_eps,
-        still_gyro_rad_s=base.still_gyro_rad_s,
-    )
+    params = replace(base, c=tuple(float(v) for v in c))
     reevaluation = None
     if reevaluate_episodes:
         fresh = [REEVALUATION_SEED + i for i in range(reevaluate_episodes)]

@@ -36,13 +36,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from oracle_gap import paired  # benchmarks/oracle_gap.py (the script directory is on sys.path)
 
-from agents.gait_rule import PARAMS_FILE, GaitRuleParams, read_params, write_params
+from agents.gait_rule import PARAMS_FILE, read_params, write_params
 from agents.gait_rule_search import OUT_NAME, rule_errors, tuned_start
 from pednav_env.seeds import REEVALUATION_SEED, search_seeds
 
@@ -85,14 +86,7 @@ def average(paths: list[str], out: Path) -> Path:
     seeds = [REEVALUATION_SEED + i for i in range(n)]
     if [seeds[0], seeds[-1]] != first["reevaluation"]["episode_seeds"]:
         raise ValueError(f"{first['path']}: re-evaluation seeds are not {seeds[0]}…{seeds[-1]}")
-    params = read_params(first["path"])
-    params = GaitRuleParams(
-        c=tuple(float(v) for v in c),
-        feature=params.feature,
-        feature_ref=params.feature_ref,
-        feature_eps=params.feature_eps,
-        still_gyro_rad_s=params.still_gyro_rad_s,
-    )
+    params = replace(read_params(first["path"]), c=tuple(float(v) for v in c))
     err = rule_errors(c[None], seeds, params)[0]
     record = {
         "averaged_from": [r["path"] for r in runs],

@@ -36,7 +36,7 @@ import numpy as np
 
 from pednav_env.calibration.compare import SimModel
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
-from pednav_env.calibration.stats import WalkSamples, log10_shoe, walk_stats
+from pednav_env.calibration.stats import WalkSamples, walk_stats
 from pednav_env.envs.foot_filters import shoe_knobs
 from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.replay.setup import real_fixed_setup
@@ -46,23 +46,14 @@ ROOT = Path(__file__).resolve().parents[1]
 BINS = ((0.3, 0.8), (0.8, 1.3), (1.3, 1.8), (1.8, 2.6), (2.6, 4.0))
 #: Speed bands simulated (the calibrated scenario's 0.3–3 m/s).
 SIM_BANDS = ((0.3, 0.8), (0.8, 1.3), (1.3, 1.8), (1.8, 2.6), (2.6, 3.0))
-PERCENTILE = 5.0
 
 
 def stride_quietness(samples: WalkSamples) -> np.ndarray:
-    """Rows (speed m/s, 5th percentile of log10 SHOE) per stride of ``samples``."""
-    stats = walk_stats(samples, per_stride=True)
-    log_shoe = log10_shoe(samples.omega_b, samples.f_b, samples.rate_hz)
-    s = stats.strides
-    rows = []
-    for t0, d, v in zip(s.start_s, s.duration_s, s.speed_mps, strict=True):
-        a = int(round(t0 * samples.rate_hz))
-        b = int(round((t0 + d) * samples.rate_hz))
-        seg = log_shoe[a:b]
-        seg = seg[np.isfinite(seg)]
-        if seg.size >= 10 and math.isfinite(v):
-            rows.append((v, float(np.percentile(seg, PERCENTILE))))
-    return np.array(rows, dtype=float).reshape(-1, 2)
+    """Rows (speed m/s, 5th percentile of log10 SHOE) per stride of ``samples``
+    (:attr:`pednav_env.calibration.stats.StrideStats.log_shoe_p5`)."""
+    s = walk_stats(samples, per_stride=True).strides
+    keep = np.isfinite(s.speed_mps) & np.isfinite(s.log_shoe_p5)
+    return np.stack([s.speed_mps[keep], s.log_shoe_p5[keep]], axis=1)
 
 
 def thresholds() -> dict[str, float]:
