@@ -1,9 +1,12 @@
 """The calibrated scenario of pednav/FootZupt-v0 per speed band: how the episodes
 are spread over the bands, and how action 0 of each filter family (paper 003's
-filter, ``real-fixed``) fares in each (docs/ENV_FOOT.md).
+filter, ``real-fixed``) or other named policies fare in each (docs/ENV_FOOT.md).
 
 Each policy plays the first episode of seeds S … S+N−1 (development evaluation
-seeds) in one vector env, action 0 throughout. Every decision interval is filed
+seeds) in one vector env of its own filter family: by default action 0 of each
+family (``paper``, ``real-fixed``); ``--policies`` names others as ``pednav
+evaluate`` does (``tuned``, ``oracle``, ``gait-rule``, ...; stateless policies
+only; the privileged oracle gets ``info["context"]``). Every decision interval is filed
 under the speed band of its privileged context (``info["context"]``, the truth
 walking speed over the interval). Per band: the share of the intervals, the
 horizontal error growth over the band's intervals per metre walked in them
@@ -12,22 +15,26 @@ that band (share of all episodes). The shares are those of the first policy's
 intervals (until each episode's end or divergence). Command:
 
     PYTHONPATH=. .venv/bin/python benchmarks/foot_speed_bands.py --episodes 200 --seed 20000
+    PYTHONPATH=. .venv/bin/python benchmarks/foot_speed_bands.py --episodes 200 --seed 20800 \
+        --policies real-fixed tuned oracle gait-rule
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 import pednav_env  # noqa: F401  (registers the environments)
+from agents.policies import load_policy
 from pednav_env.envs.foot_context import SPEED_BANDS
 from pednav_env.seeds import check_evaluation_seeds
 
 ENV_ID = "pednav/FootZupt-v0"
-POLICIES = {"paper": "paper", "real-fixed": "shoe"}
+DEFAULT_POLICIES = ("paper", "real-fixed")
 
 
 def band_label(band: tuple[float, float]) -> str:
@@ -35,9 +42,11 @@ def band_label(band: tuple[float, float]) -> str:
     return f"≥ {lo:g}" if np.isinf(hi) else f"{lo:g}–{hi:g}"
 
 
-def play(family: str, episodes: int, seed: int) -> dict[str, np.ndarray]:
+def play(policy: Any, episodes: int, seed: int) -> dict[str, np.ndarray]:
     """Per band: intervals, error growth (m), distance (m), divergences; plus the
-    episodes' durations (s) and mean errors (m)."""
+    episodes' durations (s) and mean errors (m). ``policy`` plays on its own
+    filter family (``policy.filter_family``)."""
+    family = policy.filter_family
     venv = gym.make_vec(
         ENV_ID,
         num_envs=episodes,
@@ -45,7 +54,7 @@ def play(family: str, episodes: int, seed: int) -> dict[str, np.ndarray]:
         filter=family,
         scenario="calibrated",
     )
-    _, info = venv.reset(seed=seed)
+    obs, info = venv.reset(seed=seed)
     nb = len(SPEED_BANDS)
     out = {k: np.zeros(nb) for k in ("intervals", "growth_m", "distance_m", "diverged")}
     live = np.ones(episodes, dtype=bool)
@@ -54,10 +63,12 @@ def play(family: str, episodes: int, seed: int) -> dict[str, np.ndarray]:
     context = info["context"].copy()
     last_err = np.zeros(episodes)
     last_dist = np.zeros(episodes)
-    zero = np.zeros((episodes, venv.single_action_space.shape[0]), np.float32)
+    privileged = getattr(policy, "needs_context", False)
     dt = venv.unwrapped.config.decision_interval_s
     while live.any():
-        _, reward, term, trunc, info = venv.step(zero)
+        extra = {"context": context} if privileged else {}
+        action, _ = policy.predict(obs, deterministic=True, **extra)
+        obs, reward, term, trunc, info = venv.step(np.asarray(action, np.float32))
         final = info.get("final_info")
         err = np.array(
             [
@@ -95,14 +106,22 @@ def main() -> None:
     ap.add_argument("--episodes", type=int, default=200)
     ap.add_argument("--seed", type=int, default=20_000)
     ap.add_argument("--json", action="store_true", help="print the figures as JSON too")
+    ap.add_argument(
+        "--policies",
+        nargs="+",
+        default=list(DEFAULT_POLICIES),
+        help="policies as pednav evaluate names them (default: action 0 of each family)",
+    )
     args = ap.parse_args()
     check_evaluation_seeds(args.seed, args.episodes)
-    results = {name: play(family, args.episodes, args.seed) for name, family in POLICIES.items()}
+    space = gym.make(ENV_ID, filter="shoe").action_space
+    policies = {name: load_policy(name, space, ENV_ID) for name in args.policies}
+    results = {name: play(pol, args.episodes, args.seed) for name, pol in policies.items()}
     first = next(iter(results.values()))
     share = first["intervals"] / first["intervals"].sum()
     print(
         f"{ENV_ID}, scenario calibrated, {args.episodes} episodes, seeds {args.seed}…"
-        f"{args.seed + args.episodes - 1}, action 0 of each family"
+        f"{args.seed + args.episodes - 1}, policies {', '.join(policies)}"
     )
     head = f"{'speed band (m/s)':<17} {'share':>6}"
     for name in results:
@@ -129,7 +148,7 @@ def main() -> None:
         )
     print(
         f"episode length {np.mean(first['duration_s']):.0f} s mean "
-        f"(until the end or a paper divergence)"
+        f"(until the end or a divergence of {next(iter(results))})"
     )
     if args.json:
         print(json.dumps(table, default=float))
