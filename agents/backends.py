@@ -150,17 +150,22 @@ class RayBackend:
 
 
 def _thread_env() -> dict[str, str]:
-    """This process's thread counts for the workers' OpenMP/MKL runtimes.
+    """This process's thread counts for the workers' OpenMP/MKL runtimes, and one
+    numba thread per worker.
 
     Ray starts each worker with ``OMP_NUM_THREADS=1``; PyTorch's CPU kernels started
     that way round a network's outputs and training differently (in the last bits)
     from a process started with several threads, even when both train on one
     thread (:func:`one_torch_thread`). Workers get this process's setting instead.
+    Each task reserves one CPU, so the foot env's compiled kernel, which runs its
+    walkers on all of numba's threads, runs on one thread in a worker
+    (``NUMBA_NUM_THREADS=1``; its results do not depend on the thread count,
+    :mod:`pednav_env.nav.kernel_threads`).
     """
     import torch
 
     threads = str(torch.get_num_threads())
-    return {"OMP_NUM_THREADS": threads, "MKL_NUM_THREADS": threads}
+    return {"OMP_NUM_THREADS": threads, "MKL_NUM_THREADS": threads, "NUMBA_NUM_THREADS": "1"}
 
 
 def _project_packages() -> list[Any]:

@@ -6,6 +6,8 @@
     .venv/bin/python benchmarks/kernel_alone.py time /tmp/shoe_blocks.pkl [R]
     # two code trees in one process, alternately (e.g. main's checkout against this one)
     .venv/bin/python benchmarks/kernel_alone.py pair /tmp/shoe_blocks.pkl /work/main . [R]
+    # 1 thread against all of numba's threads, alternately: CPU and wall time, outputs
+    .venv/bin/python benchmarks/kernel_alone.py threads /tmp/shoe_blocks.pkl [R]
 
 ``capture FAMILY FILE``: the native ``FootZupt-v0`` vector env of ``pednav bench foot``
 (N = 256, ``scenario="random"``, filter family FAMILY, seeds 0-255, action 0) is stepped
@@ -21,7 +23,11 @@ process: each tree's ``pednav_env`` is copied to a temporary directory under its
 package name, and the two kernels run the same blocks alternately (the order swapped
 every round), R rounds (default 10); it prints the least CPU time of each summed
 over the blocks and their ratio. Run it with the same tree twice for the harness's
-own spread (A/A).
+own spread (A/A). ``threads FILE [R]`` runs the blocks alternately with one numba
+thread (the serial kernel) and with all of numba's threads (``NUMBA_NUM_THREADS``,
+default all cores), R rounds (default 10), and prints for each the least wall time
+(``perf_counter``) and the least CPU time (all threads) per block, summed, with the
+output hashes, which must be equal.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -89,6 +96,51 @@ def time_blocks(path: str, reps: int = 15) -> None:
         total += best
     outputs = digest.hexdigest()[:16]
     print(f"kernel {total * 1e3:.2f} ms CPU per {len(calls)} blocks; outputs {outputs}")
+
+
+def _run_block(args: tuple, digest: Any) -> tuple[float, float]:
+    """Wall and CPU seconds of one kernel call on a fresh copy of ``args``; the
+    outputs go into ``digest`` when one is given."""
+    from pednav_env.nav.zupt_kernel import advance_block
+
+    fresh = copy.deepcopy(args)
+    w0, c0 = time.perf_counter(), time.process_time()
+    n_log = advance_block(*fresh)
+    wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+    if digest is not None:
+        digest.update(np.int64(n_log).tobytes())
+        for group in fresh[3:7]:  # filters, detector, output, log
+            for a in group:
+                digest.update(np.ascontiguousarray(a).tobytes())
+    return wall, cpu
+
+
+def threads(path: str, reps: int = 10) -> None:
+    """Least wall and CPU time per block (summed) with 1 thread and with all."""
+    import numba
+
+    with open(path, "rb") as fh:
+        calls = pickle.load(fh)
+    counts = (1, numba.config.NUMBA_NUM_THREADS)
+    best = {t: np.full((2, len(calls)), np.inf) for t in counts}
+    digests = {t: hashlib.sha256() for t in counts}
+    for t in counts:  # compile / load the cache of both paths
+        numba.set_num_threads(t)
+        _run_block(calls[0], None)
+    for r in range(reps):
+        for t in counts if r % 2 == 0 else counts[::-1]:
+            numba.set_num_threads(t)
+            for b, args in enumerate(calls):
+                wall, cpu = _run_block(args, digests[t] if r == 0 else None)
+                best[t][:, b] = np.minimum(best[t][:, b], (wall, cpu))
+    for t in counts:
+        wall, cpu = best[t].sum(axis=1) * 1e3
+        print(
+            f"{t} thread(s): wall {wall:.2f} ms, CPU {cpu:.2f} ms per {len(calls)} blocks "
+            f"(least of {reps}); outputs {digests[t].hexdigest()[:16]}"
+        )
+    one, many = (best[t].sum(axis=1) for t in counts)
+    print(f"wall {counts[1]} / 1 thread: {many[0] / one[0]:.3f}; CPU {many[1] / one[1]:.3f}")
 
 
 def _renamed_copy(tree: str, name: str, root: Path) -> str:
@@ -145,6 +197,8 @@ if __name__ == "__main__":
         capture(sys.argv[2], sys.argv[3])
     elif len(sys.argv) >= 5 and sys.argv[1] == "pair":
         pair(sys.argv[2], sys.argv[3], sys.argv[4], int(sys.argv[5]) if len(sys.argv) > 5 else 10)
+    elif len(sys.argv) >= 3 and sys.argv[1] == "threads":
+        threads(sys.argv[2], int(sys.argv[3]) if len(sys.argv) > 3 else 10)
     elif len(sys.argv) >= 3 and sys.argv[1] == "time":
         time_blocks(sys.argv[2], int(sys.argv[3]) if len(sys.argv) > 3 else 15)
     else:

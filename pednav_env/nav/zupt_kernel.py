@@ -1,9 +1,9 @@
 """Compiled per-walker kernel of the ZUPT-UKF of paper 003.
 
 :meth:`pednav_env.nav.zupt_ukf.ZuptUkf.advance` hands a whole block of K IMU
-samples of all N walkers to :func:`advance_block`, which runs, walker after
-walker and sample after sample, the filter that the module docstring of
-:mod:`pednav_env.nav.zupt_ukf` describes. Per sample j of a walker:
+samples of all N walkers to :func:`advance_block`, which runs each walker (on
+numba's threads, :mod:`pednav_env.nav.kernel_threads`) sample after sample
+through the filter of :mod:`pednav_env.nav.zupt_ukf`'s docstring. Per sample j:
 
 1. :func:`pednav_env.nav.preintegration.strapdown_increment`: the strapdown
    increments of paper 003 eq (3) (attitude increment C(Δq), Δq from
@@ -33,8 +33,8 @@ Arguments are grouped in NamedTuples of arrays and scalars
 (:class:`KernelSettings`, :class:`WalkerKnobs`, :class:`UkfModel`,
 :class:`WalkerFilters`, :class:`DetectorState`, :class:`BlockInput`,
 :class:`BlockOutput`, :class:`UpdateLog`), which numba passes to compiled code
-as they are; scratch arrays are a :class:`SampleScratch` and a
-:class:`ZuptScratch`, allocated once per block. :func:`advance_walker` takes a
+as they are; scratch arrays (:mod:`pednav_env.nav.kernel_threads`) are allocated
+once per thread and block. :func:`advance_walker` takes a
 walker's arrays out of the tuples before its sample loop, and the helpers
 called at every sample are inlined by numba: a compiled call per sample, with
 whole tuples as arguments, would cost more than the sample's arithmetic
@@ -44,8 +44,9 @@ Compiled, against the rule of one numpy call chain (docs/CONVENTIONS.md), as
 ZUPTs fall at data-dependent samples of each walker (docs/PERFORMANCE.md);
 walker i's arithmetic never depends on the others (lanes equal scalar envs).
 
-Numba caches compiled code per source file: after editing a compiled function
-of a module this one calls, touch this file (or clear ``__pycache__``).
+Numba caches compiled code per source file, keyed by the file's content (numba
+0.68: a hash of it; touching the file does not refresh the cache): after editing a
+compiled function of a module this one calls, clear ``__pycache__``.
 """
 
 from __future__ import annotations
@@ -54,9 +55,18 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from pednav_env.nav.detector_kernel import Eq5Thresholds, detect, stance_logic
+from pednav_env.nav.kernel_threads import (
+    SampleScratch,
+    ZuptScratch,
+    compact_log,
+    fetch_add,
+    new_sample_scratch,
+    new_zupt_scratch,
+    thread_parts,
+)
 from pednav_env.nav.preintegration import (
     AnchorSums,
     Preintegral,
@@ -75,9 +85,7 @@ from pednav_env.nav.preintegration import (
 )
 from pednav_env.nav.sigma_angles import moved_residuals
 from pednav_env.nav.zupt_algebra import (
-    AlgebraScratch,
     draw_sigmas,
-    new_algebra_scratch,
     prior_moments,
     residual_mean,
     residuals,
@@ -178,66 +186,6 @@ class UpdateLog(NamedTuple):
     x: np.ndarray  # (M, 2, 9) prior and posterior mean
     P: np.ndarray  # (M, 2, 9, 9) prior and posterior covariance
     nis: np.ndarray  # (M,)
-
-
-class SampleScratch(NamedTuple):
-    """Scratch arrays of the per-sample steps, reused across walkers."""
-
-    w: np.ndarray  # (3,) rad/s, bias-corrected rate
-    f_j: np.ndarray  # (3,) m/s², the sample's specific force
-    dC: np.ndarray  # (3, 3) C(Δq) of the sample
-    f_mid: np.ndarray  # (3,) m/s², specific force in mid-interval axes
-    F: np.ndarray  # (3,) m/s², the same in anchor axes
-    pre: Preintegral
-    sums: AnchorSums
-    v_c: np.ndarray  # (3,) m/s, central point's velocity
-    p_c: np.ndarray  # (3,) m, central point's position
-    p_mean: np.ndarray  # (3,) m, mean position
-
-
-@njit(cache=True)
-def new_sample_scratch() -> SampleScratch:
-    """Scratch arrays for the per-sample steps of :func:`advance_walker`."""
-    return SampleScratch(
-        np.empty(3),
-        np.empty(3),
-        np.empty((3, 3)),
-        np.empty(3),
-        np.empty(3),
-        Preintegral(np.empty((3, 3)), np.empty(3), np.empty(3)),
-        AnchorSums(np.empty((3, 3)), np.empty(3), np.empty(3)),
-        np.empty(3),
-        np.empty(3),
-        np.empty(3),
-    )
-
-
-class ZuptScratch(NamedTuple):
-    """Scratch arrays of a ZUPT (and of a recorded mean state)."""
-
-    chi: np.ndarray  # (S, 9) moved sigma states
-    C_moved: np.ndarray  # (S, 3, 3) their attitudes
-    dev: np.ndarray  # (S, 9) residuals from the mean
-    x: np.ndarray  # (9,) prior, then posterior mean
-    P: np.ndarray  # (9, 9) prior, then posterior covariance
-    alg: AlgebraScratch  # the update's and the draw's work arrays
-    powers: np.ndarray  # (4,) τᵖ · process-noise scale
-    R_diag: np.ndarray  # (4,)
-
-
-@njit(cache=True)
-def new_zupt_scratch(num_sigmas: int, num_powers: int) -> ZuptScratch:
-    """Scratch arrays for :func:`zupt`, reused across walkers."""
-    return ZuptScratch(
-        np.empty((num_sigmas, 9)),
-        np.empty((num_sigmas, 3, 3)),
-        np.empty((num_sigmas, 9)),
-        np.empty(9),
-        np.empty((9, 9)),
-        new_algebra_scratch(),
-        np.empty(num_powers),
-        np.empty(4),
-    )
 
 
 def new_detector_state(num_walkers: int, window: int) -> DetectorState:
@@ -471,7 +419,6 @@ def advance_walker(
     return n_log
 
 
-@njit(cache=True)
 def advance_block(
     block: BlockInput,
     settings: KernelSettings,
@@ -488,8 +435,28 @@ def advance_block(
     detector flags, accepted ZUPTs, Σ log(1 + NIS), mean positions, divergence
     index and last accepted ZUPT of each walker, and, when their arrays are
     not empty, the mean position / state after every sample; ``log`` (when not
-    empty, room for N·K rows) every ZUPT. Returns the number of logged ZUPTs.
+    empty, room for N·K rows) every ZUPT, walker by walker. Returns the number
+    of logged ZUPTs. On numba's threads (:func:`advance_parts`), or walker after
+    walker with one thread or one walker (:func:`advance_serial`): the same outputs.
     """
+    parts = thread_parts(block.omega.shape[0])
+    if parts == 1:
+        return advance_serial(block, settings, knobs, model, filters, detector, out, log)
+    return advance_parts(block, settings, knobs, model, filters, detector, out, log, parts)
+
+
+@njit(cache=True)
+def advance_serial(
+    block: BlockInput,
+    settings: KernelSettings,
+    knobs: WalkerKnobs,
+    model: UkfModel,
+    filters: WalkerFilters,
+    detector: DetectorState,
+    out: BlockOutput,
+    log: UpdateLog,
+) -> int:
+    """:func:`advance_block` on this thread, walker after walker."""
     ss = new_sample_scratch()
     zs = new_zupt_scratch(model.Wm.shape[0], model.q_basis.shape[0])
     n_log = 0
@@ -498,3 +465,36 @@ def advance_block(
             i, block, settings, knobs, model, filters, detector, out, log, n_log, ss, zs
         )
     return n_log
+
+
+@njit(cache=True, parallel=True)
+def advance_parts(
+    block: BlockInput,
+    settings: KernelSettings,
+    knobs: WalkerKnobs,
+    model: UkfModel,
+    filters: WalkerFilters,
+    detector: DetectorState,
+    out: BlockOutput,
+    log: UpdateLog,
+    parts: int,
+) -> int:
+    """:func:`advance_block` on ``parts`` threads, each with its own scratch, taking
+    walkers one at a time from a shared counter; walker i writes only its own rows,
+    its log rows from i·K on, closed up afterwards (:mod:`pednav_env.nav.kernel_threads`)."""
+    n, k = block.omega.shape[0], block.omega.shape[1]
+    region = k if log.index.shape[0] > 0 else 0  # log rows of a walker
+    logged = np.zeros(n, dtype=np.int64)
+    taken = np.zeros(1, dtype=np.int64)  # walkers handed out so far
+    for _ in prange(parts):
+        ss = new_sample_scratch()
+        zs = new_zupt_scratch(model.Wm.shape[0], model.q_basis.shape[0])
+        i = fetch_add(taken, 1)
+        while i < n:
+            first = i * region
+            last = advance_walker(
+                i, block, settings, knobs, model, filters, detector, out, log, first, ss, zs
+            )
+            logged[i] = last - first
+            i = fetch_add(taken, 1)
+    return compact_log(log.index, log.x, log.P, log.nis, logged, region)

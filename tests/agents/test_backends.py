@@ -2,6 +2,7 @@
 
 import json
 
+import numba
 import pytest
 import torch
 
@@ -56,6 +57,8 @@ def test_backends_map_in_item_order_and_raise_a_task_error(ray_backend):
     ]
     assert sorted(done) == seeds
     assert ray_backend.workers == 2
+    # a task reserves one CPU: the foot kernel runs on one numba thread there
+    assert ray_backend.map(lambda _: numba.get_num_threads(), [0, 1]) == [1, 1]
     with pytest.raises(ValueError, match="seed must be in"):  # the task's own ValueError
         ray_backend.map(training_seed, [1, -1])
     with pytest.raises(ValueError, match="backend must be one of"):
