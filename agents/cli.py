@@ -22,6 +22,8 @@ Subcommands (their JSON formats are contracts, see docs/CONTRACTS.md):
   foot walk written as a CSV recording that ``pednav run`` reads.
 - ``pednav bench ENV [--json] [--sizes N ...]`` — env steps/s of the native
   vector env against a filterpy reference (ENV = foot, waist, marker).
+- ``pednav fit-rule RECORDING|DIR ... --out DIR [--folds K]`` — the gait-adaptive
+  SHOE rule fitted on recordings with truth (:mod:`agents.cli_fit_rule`).
 - ``pednav sim2real RECORDING... [--model M] [--walks N] [--json] [--plot DIR]``
   — the foot simulator beside recorded walks per speed band
   (docs/SIM_TO_REAL.md).
@@ -42,6 +44,7 @@ import sys
 from collections.abc import Sequence
 
 from agents.cli_distill import add_distill_command
+from agents.cli_fit_rule import add_fit_rule_command
 from agents.cli_options import (
     add_backend_options,
     add_env_options,
@@ -299,6 +302,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_tune_command(sub)
 
     add_distill_command(sub)
+
+    add_fit_rule_command(sub)
 
     be = sub.add_parser("bench", help="throughput of a native vector env vs filterpy")
     be.add_argument("env", help="foot, waist or marker")
