@@ -215,7 +215,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--policy",
         nargs="+",
         required=True,
-        help="paper, tuned, adaptive, pretrained, gait-rule (foot envs, shoe family), "
+        help="paper, tuned, adaptive, pretrained, gait-rule, gait-rule-real (foot envs, shoe "
+        "family; the rule fitted on simulated walks / on recordings), "
         "oracle (privileged; simulated envs only), or a path: a training run directory, "
         "a saved SB3 model (.zip, with vecnormalize.pkl beside it), a tuned_actions.json "
         "from pednav tune (or its run directory), or a gait_rule.json from "

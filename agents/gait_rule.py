@@ -46,8 +46,11 @@ import numpy as np
 
 from pednav_env.envs.foot_core import OBS_FEATURES
 
-#: The shipped parameters (found on simulated training walks only).
+#: The shipped parameters (found on simulated training walks only): ``gait-rule``.
 PARAMS_FILE = Path(__file__).parent / "pretrained" / "gait_rule.json"
+#: The shipped parameters fitted on recordings (:mod:`agents.gait_rule_real`):
+#: ``gait-rule-real``.
+REAL_PARAMS_FILE = Path(__file__).parent / "pretrained" / "gait_rule_real.json"
 #: The env and filter family the rule is made for.
 ENV_ID = "pednav/FootZupt-v0"
 FAMILY = "shoe"
@@ -97,14 +100,18 @@ class GaitRulePolicy:
     name = "gait-rule"
     filter_family = FAMILY
 
-    def __init__(self, params: GaitRuleParams, action_dim: int = 4) -> None:
+    def __init__(self, params: GaitRuleParams, action_dim: int = 4, name: str = "") -> None:
         if action_dim != 4:
             raise ValueError(f"gait-rule sets 4 knobs; the env's action has {action_dim}")
         self.params = params
+        if name:
+            self.name = name
 
     @classmethod
-    def from_file(cls, path: str | Path = PARAMS_FILE, action_dim: int = 4) -> GaitRulePolicy:
-        return cls(read_params(path), action_dim)
+    def from_file(
+        cls, path: str | Path = PARAMS_FILE, action_dim: int = 4, name: str = ""
+    ) -> GaitRulePolicy:
+        return cls(read_params(path), action_dim, name)
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         out = rule_actions(observation, np.asarray(self.params.c), self.params)

@@ -40,14 +40,17 @@ from typing import Any
 import numpy as np
 
 from agents.gait_rule import FAMILY, N_PARAMS, GaitRuleParams, rule_actions
-from agents.gait_rule_search import to_params, tuned_start
+from agents.gait_rule_search import rule_errors, to_params, tuned_start
 from pednav_env.io import Recording, find_recordings, load_recording
 from pednav_env.replay.metrics import footprint_errors, track_errors
 from pednav_env.replay.runner import run_prepared
+from pednav_env.seeds import search_seeds
 
 #: Decision interval of the replay (s), as ``pednav run``.
 INTERVAL_S = 0.5
 ARMSE_KEY = "armse_pyshoe_m"
+#: The group of the simulated walks in the objective.
+SIMULATED_GROUP = "simulated"
 FOOTPRINT_KEY = "footprint_mean_error_m"
 
 
@@ -144,9 +147,20 @@ def recording_errors(fr: FitRecording, cs: np.ndarray, base: GaitRuleParams) -> 
     return out
 
 
-def errors_matrix(recs: Sequence[FitRecording], cs: np.ndarray, base: GaitRuleParams) -> np.ndarray:
-    """Errors (P candidates, R recordings)."""
-    return np.column_stack([recording_errors(fr, cs, base) for fr in recs])
+def errors_matrix(
+    recs: Sequence[FitRecording],
+    cs: np.ndarray,
+    base: GaitRuleParams,
+    simulated_seeds: Sequence[int] = (),
+) -> np.ndarray:
+    """Errors (P candidates, R recordings + S simulated walks): the recordings',
+    then the time-averaged error of ``pednav/FootZupt-v0`` (shoe family,
+    calibrated scenario) on the episodes of ``simulated_seeds`` (training seeds),
+    :func:`agents.gait_rule_search.rule_errors`."""
+    cols = [recording_errors(fr, cs, base) for fr in recs]
+    if len(simulated_seeds):
+        cols.append(rule_errors(np.atleast_2d(cs), list(simulated_seeds), base))
+    return np.column_stack(cols)
 
 
 def objective(errors: np.ndarray, groups: Sequence[str]) -> np.ndarray:
@@ -164,17 +178,25 @@ def fit(
     seed: int = 1,
     base: GaitRuleParams | None = None,
     progress: Callable[[int, float], None] | None = None,
+    simulated_episodes: int = 0,
+    episode_set: int = 0,
 ) -> tuple[GaitRuleParams, dict[str, Any]]:
     """CMA-ES over the rule's parameters on ``recs`` (module docstring); returns
-    the parameters and the fit's record."""
+    the parameters and the fit's record. ``simulated_episodes`` > 0 adds a group of
+    that many calibrated simulated training walks (search episode set
+    ``episode_set``, :func:`pednav_env.seeds.search_seeds`), which covers gaits the
+    recordings may lack (running)."""
     import cma
 
     if not recs:
         raise ValueError("recordings: at least one is required")
     if generations < 1 or popsize < 2 or not (math.isfinite(sigma0) and sigma0 > 0):
         raise ValueError("generations ≥ 1, popsize ≥ 2 and sigma0 > 0 are required")
+    if simulated_episodes < 0:
+        raise ValueError(f"simulated_episodes: must be ≥ 0, got {simulated_episodes}")
     base = base or GaitRuleParams(c=(0.0,) * N_PARAMS)
-    groups = [r.group for r in recs]
+    sim = search_seeds(episode_set, simulated_episodes) if simulated_episodes else []
+    groups = [r.group for r in recs] + [SIMULATED_GROUP] * len(sim)
     x0 = tuned_start()
     es = cma.CMAEvolutionStrategy(
         x0, sigma0, {"bounds": [-1.0, 1.0], "popsize": popsize, "seed": seed, "verbose": -9}
@@ -182,13 +204,13 @@ def fit(
     start, history = time.perf_counter(), []
     for g in range(generations):
         xs = np.clip(np.asarray(es.ask()), -1.0, 1.0)
-        scores = objective(errors_matrix(recs, to_params(xs), base), groups)
+        scores = objective(errors_matrix(recs, to_params(xs), base, sim), groups)
         es.tell(list(xs), scores.tolist())
         history.append(float(scores.min()))
         if progress is not None:
             progress(g + 1, float(scores.min()))
     best = np.clip(np.asarray(es.result.xbest), -1.0, 1.0)
-    both = errors_matrix(recs, to_params(np.stack([best, x0])), base)
+    both = errors_matrix(recs, to_params(np.stack([best, x0])), base, sim)
     scores = objective(both, groups)
     kept_start = bool(scores[1] < scores[0])  # the start itself is not a CMA-ES candidate
     j = int(kept_start)
@@ -199,7 +221,11 @@ def fit(
         "objective_log10_m": float(scores[j]),
         "start_objective_log10_m": float(scores[1]),
         "kept_start": kept_start,
-        "errors_m": dict(zip([r.name for r in recs], both[j].round(5).tolist(), strict=True)),
+        "errors_m": dict(
+            zip([r.name for r in recs], both[j, : len(recs)].round(5).tolist(), strict=True)
+        ),
+        "simulated_episode_seeds": [sim[0], sim[-1]] if sim else [],
+        "simulated_errors_m": both[j, len(recs) :].round(4).tolist(),
         "evaluations": int(es.result.evaluations),
         "generations": generations,
         "popsize": popsize,

@@ -3,11 +3,13 @@
 Names: ``paper`` (action 0), ``tuned`` (the shipped best constant action),
 ``adaptive`` (the innovation-based rule), ``pretrained`` (the shipped tuner
 under ``agents/pretrained/``; for the foot envs' shoe family, which has no trained
-network shipped, the gait-adaptive rule ``gait-rule``), ``gait-rule`` (foot envs,
+network shipped, the gait-adaptive rule ``gait-rule-real``), ``gait-rule`` (foot envs,
 shoe family only: the SHOE threshold follows a gait feature of the sensors,
 :mod:`agents.gait_rule`, parameters in ``agents/pretrained/gait_rule.json``),
-``oracle`` (privileged: the constant tuned for the true context, the episode's on
-WaistStep and MarkerTrack, the interval's speed band on FootZupt's shoe family;
+``gait-rule-real`` (the same rule fitted on recordings, :mod:`agents.gait_rule_real`,
+parameters in ``agents/pretrained/gait_rule_real.json``), ``oracle`` (privileged:
+the constant tuned for the true context, the episode's on WaistStep and
+MarkerTrack, the interval's speed band on FootZupt's shoe family;
 :mod:`baselines.oracle`; a target, not a baseline), and for the foot envs
 ``real-fixed`` (action 0 of the shoe filter family).
 
@@ -43,7 +45,7 @@ import numpy as np
 from gymnasium import spaces
 
 from agents.features import FeaturePolicy
-from agents.gait_rule import PARAMS_FILE, GaitRulePolicy, is_params_file
+from agents.gait_rule import PARAMS_FILE, REAL_PARAMS_FILE, GaitRulePolicy, is_params_file
 from baselines import InnovationAdaptivePolicy, PaperPolicy, RealFixedPolicy, TunedFixedPolicy
 from baselines.oracle import OraclePolicy
 from baselines.tuned import RESULT_NAME
@@ -52,7 +54,15 @@ from pednav_env.envs.foot_filters import FILTER_FAMILIES, LEARNED_FAMILY, requir
 #: Shipped tuners: agents/pretrained/<env name>/.
 PRETRAINED_DIR = Path(__file__).parent / "pretrained"
 #: Policy names understood besides a path.
-BUILTIN_POLICIES = ("paper", "tuned", "adaptive", "pretrained", "gait-rule", "oracle")
+BUILTIN_POLICIES = (
+    "paper",
+    "tuned",
+    "adaptive",
+    "pretrained",
+    "gait-rule",
+    "gait-rule-real",
+    "oracle",
+)
 #: Observation statistics saved beside a model trained under VecNormalize.
 STATS_NAME = "vecnormalize.pkl"
 #: Envs that play another env's named policies (same spaces and knobs): the replay
@@ -152,7 +162,12 @@ def load_run(path: str | Path) -> Any:
 
 
 def _gait_rule(
-    path: Path, action_space: spaces.Box, env_id: str, families: bool, family: str | None
+    path: Path,
+    action_space: spaces.Box,
+    env_id: str,
+    families: bool,
+    family: str | None,
+    name: str = "",
 ) -> GaitRulePolicy:
     """The gait rule from ``path``; ValueError off the foot envs or for another family."""
     if not families:
@@ -164,7 +179,7 @@ def _gait_rule(
         raise ValueError(
             f"policy gait-rule sets the shoe filter family's knobs; it cannot run filter {family!r}"
         )
-    return GaitRulePolicy.from_file(path, int(np.prod(action_space.shape)))
+    return GaitRulePolicy.from_file(path, int(np.prod(action_space.shape)), name)
 
 
 def _with_features(policy: NormalizedModelPolicy, features: str | None, model: Any) -> Any:
@@ -219,13 +234,16 @@ def load_policy(
         return InnovationAdaptivePolicy(action_space, env_id, learned)
     if name == "gait-rule":
         return _gait_rule(PARAMS_FILE, action_space, env_id, families, family)
+    if name == "gait-rule-real":
+        return _gait_rule(REAL_PARAMS_FILE, action_space, env_id, families, family, name)
     if name == "oracle":
         return OraclePolicy.for_env(env_id, action_space, learned)
     if name == "pretrained":
         path = pretrained_dir(env_id, learned)
         if families and learned == GaitRulePolicy.filter_family and not path.exists():
-            # The shoe family's shipped tuner is the gait-adaptive rule (docs/RESULTS.md).
-            return _gait_rule(PARAMS_FILE, action_space, env_id, families, family)
+            # The shoe family's shipped tuner is the gait-adaptive rule fitted on
+            # recordings and simulated walks (docs/REAL_DATA.md, docs/RESULTS.md).
+            return _gait_rule(REAL_PARAMS_FILE, action_space, env_id, families, family, name)
         if not (path / "model.zip").exists():
             what = env_id if learned is None else f"{env_id} (filter family {learned})"
             hint = ""

@@ -89,9 +89,14 @@ def ci_mean(err: np.ndarray) -> list[float]:
 def summary(out: dict, recs) -> dict:
     names = [r.name for r in recs]
     armse = np.array([r.metric == ARMSE_KEY for r in recs])
-    cols = {k: out[k]["held_out_errors_m"] for k in ("cv", "lodo") if k in out}
-    if "all" in out:
-        cols["all (in-sample)"] = out["all"]["errors_m"]
+    cols = {}
+    sims = {"_" + k.split("_", 1)[1] for k in out if k.split("_")[0] in ("cv", "lodo", "all")}
+    for suffix in ("", *sorted(s for s in sims if s.startswith("_sim"))):
+        for k in ("cv", "lodo"):
+            if k + suffix in out:
+                cols[k + suffix] = out[k + suffix]["held_out_errors_m"]
+        if "all" + suffix in out:
+            cols[f"all{suffix} (in-sample)"] = out["all" + suffix]["errors_m"]
     cols.update({b: out["baselines"][b] for b in BASELINES})
     shoe = np.array([out["references"][n] for n, a in zip(names, armse, strict=True) if a])
     lstm = np.array([out["references"][n] for n, a in zip(names, armse, strict=True) if not a])
@@ -137,7 +142,17 @@ def main() -> None:
     ap.add_argument("--stages", nargs="*", default=["cv", "lodo", "all"])
     ap.add_argument("--json", default=str(ROOT / "benchmarks/results/gait_rule_real_cv.json"))
     ap.add_argument("--out", default=str(ROOT / "runs/gait-rule-recordings"))
+    ap.add_argument(
+        "--simulated-episodes",
+        type=int,
+        default=0,
+        help="add a group of N calibrated simulated training walks to every fit "
+        "(results under the stage names + '_simN')",
+    )
     args = ap.parse_args()
+    sim = args.simulated_episodes
+    suffix = f"_sim{sim}" if sim else ""
+    fit_settings = {**FIT, "simulated_episodes": sim}
     shared = Path(args.shared)
     hallway = sorted((shared / "hallway-gcp-dev").glob("*_LLIO.mat"))
     recs = load_fit_recordings([shared / "pyshoe-vicon-dev", *hallway])
@@ -161,19 +176,21 @@ def main() -> None:
         save()
     if "cv" in args.stages:
         print("4-fold cross-validation", file=sys.stderr)
-        out["cv"] = cross_validate(recs, folds(recs, 4), progress=_progress, **FIT)
+        out["cv" + suffix] = cross_validate(
+            recs, folds(recs, 4), progress=_progress, **fit_settings
+        )
         save()
     if "lodo" in args.stages:
         print("leave one data set out", file=sys.stderr)
         groups = np.array([r.group for r in recs])
         held = [np.flatnonzero(groups == g) for g in sorted(set(groups))]
-        out["lodo"] = cross_validate(recs, held, progress=_progress, **FIT)
+        out["lodo" + suffix] = cross_validate(recs, held, progress=_progress, **fit_settings)
         save()
     if "all" in args.stages:
         print("fit on all recordings", file=sys.stderr)
-        params, record = fit(recs, progress=_progress, **FIT)
-        out["all"] = {"c": list(params.c), **record}
-        write_params(params, Path(args.out) / "gait_rule.json", record)
+        params, record = fit(recs, progress=_progress, **fit_settings)
+        out["all" + suffix] = {"c": list(params.c), **record}
+        write_params(params, Path(args.out + suffix) / "gait_rule.json", record)
         save()
     out["summary"] = summary(out, recs)
     out["seconds_last_run"] = round(time.time() - t0, 1)

@@ -184,7 +184,8 @@ def test_cli_evaluate_and_errors(capsys, tmp_path):
     err = capsys.readouterr().err
     assert "unknown policy 'soothsayer'" in err and err.count("\n") == 1
     # every name the foot env accepts, real-fixed (its shoe family's action 0) among them
-    for name in ("paper", "tuned", "adaptive", "pretrained", "gait-rule", "oracle", "real-fixed"):
+    names = ("paper", "tuned", "adaptive", "pretrained", "gait-rule", "gait-rule-real", "oracle")
+    for name in (*names, "real-fixed"):
         assert name in err
     replay = "pednav/FootZuptReplay-v0"
     with pytest.raises(ValueError, match="unknown policy 'soothsayer'") as exc:

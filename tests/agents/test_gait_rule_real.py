@@ -101,6 +101,8 @@ def test_fit_is_never_worse_than_its_start():
         fit(recs, popsize=1)
     with pytest.raises(ValueError, match="at least one"):
         fit([])
+    with pytest.raises(ValueError, match="simulated_episodes: must be ≥ 0, got -1"):
+        fit(recs, simulated_episodes=-1)
 
 
 def test_cli_writes_a_rule_that_pednav_run_plays(tmp_path, capsys):

@@ -1,4 +1,5 @@
-"""`pretrained` for the foot envs' shoe family is the shipped gait-adaptive rule."""
+"""`pretrained` for the foot envs' shoe family is the shipped gait-adaptive rule
+fitted on recordings (`gait-rule-real`)."""
 
 from __future__ import annotations
 
@@ -7,17 +8,19 @@ import numpy as np
 import pytest
 
 import pednav_env  # noqa: F401  (registers the envs)
-from agents.gait_rule import GaitRulePolicy
+from agents.gait_rule import PARAMS_FILE, REAL_PARAMS_FILE, GaitRulePolicy, read_params
 from agents.policies import load_policy
 
 FOOT = "pednav/FootZupt-v0"
 
 
-def test_shoe_pretrained_is_the_gait_rule_and_acts_like_it():
+def test_shoe_pretrained_is_the_recordings_rule_and_acts_like_it():
     space = gym.make(FOOT, filter="shoe").action_space
     pretrained = load_policy("pretrained", space, FOOT)
-    rule = load_policy("gait-rule", space, FOOT)
+    rule = load_policy("gait-rule-real", space, FOOT)
     assert isinstance(pretrained, GaitRulePolicy)
+    assert pretrained.params == read_params(REAL_PARAMS_FILE)
+    assert pretrained.params != read_params(PARAMS_FILE)  # not the simulated walks' rule
     assert pretrained.filter_family == "shoe"
     env = gym.make(FOOT, filter="shoe")
     obs, _ = env.reset(seed=20_000)
