@@ -82,7 +82,7 @@ def load_fit_recordings(paths: Sequence[str | Path]) -> list[FitRecording]:
     """Recordings of ``paths`` (files, or directories of recordings); the group of
     each is the name of the directory it is in. ValueError naming the path when
     a path does not exist, a directory holds no recording, or a file cannot be
-    scored; also when two paths name the same file."""
+    scored; also when two paths name the same file or two files hold the same samples."""
     files: list[Path] = []
     for p in map(Path, paths):
         if p.is_dir():
@@ -95,14 +95,29 @@ def load_fit_recordings(paths: Sequence[str | Path]) -> list[FitRecording]:
         else:
             raise ValueError(f"{p}: no such file or directory")
     seen: set[Path] = set()
+    samples: dict[bytes, Path] = {}
     out = []
     for f in files:
         key = f.resolve()
         if key in seen:
             raise ValueError(f"{f}: given twice")
         seen.add(key)
-        out.append(scored_recording(load_recording(f), f.resolve().parent.name, f))
+        rec = load_recording(f)
+        same = _sample_key(rec)
+        if same in samples:
+            raise ValueError(
+                f"{f}: the same samples as {samples[same]} (one walk twice?): "
+                "give one of them, or the walk counts twice"
+            )
+        samples[same] = f
+        out.append(scored_recording(rec, f.resolve().parent.name, f))
     return out
+
+
+def _sample_key(rec: Recording) -> bytes:
+    """The first 200 angular-rate samples (to 1e-9 rad/s): equal for one walk saved
+    in two formats (e.g. a vendor CSV and its .mat) or cut to two lengths."""
+    return np.round(rec.omega_b[:200], 9).tobytes()
 
 
 def _schedule(rec: Recording, cs: np.ndarray, base: GaitRuleParams) -> tuple[Any, dict]:

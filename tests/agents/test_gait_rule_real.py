@@ -70,6 +70,17 @@ def test_loader_errors_name_the_path(tmp_path):
         load_fit_recordings([PYSHOE_SAMPLE, PYSHOE_SAMPLE])
     with pytest.raises(ValueError, match=r"xio_short_walk.*no truth track and no footprints"):
         load_fit_recordings([XIO])
+    (tmp_path / "copy").mkdir()
+    shutil.copy(PYSHOE_SAMPLE, tmp_path / "copy" / "other_name.mat")
+    with pytest.raises(ValueError, match=r"other_name\.mat: the same samples as .*first7s\.mat"):
+        load_fit_recordings([PYSHOE_SAMPLE, tmp_path / "copy"])
+
+
+def test_one_walk_in_two_formats_is_refused():
+    csv = HALLWAY_DATA / "SensorConnectData_31_first5s.csv"
+    assert load_fit_recordings([csv])[0].metric == FOOTPRINT_KEY
+    with pytest.raises(ValueError, match="same samples"):
+        load_fit_recordings([csv, HALLWAY_MAT])
 
 
 def test_groups_and_metrics_follow_the_files(tmp_path):
