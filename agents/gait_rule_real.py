@@ -41,6 +41,7 @@ import numpy as np
 
 from agents.gait_rule import FAMILY, N_PARAMS, GaitRuleParams, rule_actions
 from agents.gait_rule_search import rule_errors, to_params, tuned_start
+from agents.run_recording import knob_schedule
 from pednav_env.io import Recording, find_recordings, load_recording
 from pednav_env.replay.metrics import footprint_errors, track_errors
 from pednav_env.replay.runner import run_prepared
@@ -120,35 +121,17 @@ def _sample_key(rec: Recording) -> bytes:
     return np.round(rec.omega_b[:200], 9).tobytes()
 
 
-def _schedule(rec: Recording, cs: np.ndarray, base: GaitRuleParams) -> tuple[Any, dict]:
-    """Play the rule with each parameter row of ``cs`` on its own lane of the
-    replay core; return the prepared recording and the knob schedule (K, P)
-    (a lane's knobs are held from the interval its filter diverged in, as
-    ``pednav run`` stops there)."""
-    from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
-
-    lanes = len(cs)
-    config = FootReplayConfig(decision_interval_s=INTERVAL_S, filter_family=FAMILY)
-    core = FootReplayCore(config, lanes, "pednav fit-rule", recordings=[rec])
-    core.reset_lanes(np.arange(lanes), [np.random.default_rng(0) for _ in range(lanes)])
-    rows: dict[str, list[np.ndarray]] = {}
-    dead = np.zeros(lanes, dtype=bool)
-    obs = core.obs.copy()
-    while core.cursor[0] < core.length[0] and not dead.all():
-        obs, _, terminated, _, _ = core.step(rule_actions(obs, cs, base).astype(np.float64))
-        for k, v in core.knob_values().items():
-            row = v.copy()
-            if rows.get(k):
-                row[dead] = rows[k][-1][dead]
-            rows.setdefault(k, []).append(row)
-        dead |= terminated & core.engine.diverged
-    return core.trials[0].prepared, {k: np.array(v) for k, v in rows.items()}
-
-
 def recording_errors(fr: FitRecording, cs: np.ndarray, base: GaitRuleParams) -> np.ndarray:
     """The error of ``fr`` (its metric, m) for each parameter row of ``cs`` (P, 5)."""
     cs = np.atleast_2d(np.asarray(cs, dtype=np.float64))
-    prep, schedule = _schedule(fr.recording, cs, base)
+    prep, schedule = knob_schedule(
+        fr.recording,
+        FAMILY,
+        len(cs),
+        lambda obs: rule_actions(obs, cs, base).astype(np.float64),
+        INTERVAL_S,
+        "pednav fit-rule",
+    )
     run = run_prepared(prep, num_lanes=len(cs), schedule=schedule, interval_s=INTERVAL_S)
     out = np.empty(len(cs))
     for j in range(len(cs)):

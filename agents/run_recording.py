@@ -24,6 +24,7 @@ footprints ``footprints``, ``footprint_mean_error_m``,
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -33,7 +34,7 @@ import numpy as np
 from pednav_env.io import CsvLayout, LoadOptions, Recording, find_recordings, load_recording
 from pednav_env.io.hallway import AUTO, FootprintChoice
 from pednav_env.replay.metrics import footprint_errors, loop_closure, track_errors
-from pednav_env.replay.runner import RecordingRun, prepare, run_prepared
+from pednav_env.replay.runner import PreparedRecording, RecordingRun, prepare, run_prepared
 from pednav_env.replay.setup import SETUP_NAMES, RealFilterSetup, load_setup, named_setup
 from pednav_env.replay.track import run_states, write_track_csv
 
@@ -70,7 +71,6 @@ def run_with_policy(
     from gymnasium import spaces
 
     from agents.policies import split_name
-    from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
 
     if split_name(policy_name)[0] == "oracle":
         raise ValueError(ORACLE_ON_RECORDINGS)
@@ -79,23 +79,58 @@ def run_with_policy(
     if getattr(policy, "needs_context", False):
         raise ValueError(ORACLE_ON_RECORDINGS)
     family = getattr(policy, "filter_family", None) or "paper"
-    config = FootReplayConfig(decision_interval_s=interval_s, filter_family=family)
-    core = FootReplayCore(config, 1, "pednav run", recordings=[rec])
-    core.reset_lanes(np.array([0]), [np.random.default_rng(0)])
-    obs = core.obs.copy()
-    rows: dict[str, list[np.ndarray]] = {}
     state, start = None, np.array([True])
-    while core.cursor[0] < core.length[0]:
+
+    def act(obs: np.ndarray) -> np.ndarray:
+        nonlocal state, start
         action, state = policy.predict(obs, state=state, episode_start=start, deterministic=True)
         start = np.array([False])
-        obs, _, terminated, _, _ = core.step(np.asarray(action, dtype=np.float64).reshape(1, -1))
-        for k, v in core.knob_values().items():
-            rows.setdefault(k, []).append(v.copy())
-        if terminated[0] and core.engine.diverged[0]:
-            break
-    schedule = {k: np.array(v) for k, v in rows.items()}
-    prep = core.trials[0].prepared
+        return np.asarray(action, dtype=np.float64).reshape(1, -1)
+
+    prep, schedule = knob_schedule(rec, family, 1, act, interval_s, "pednav run")
     return run_prepared(prep, schedule=schedule, interval_s=interval_s, track=track), schedule
+
+
+def knob_schedule(
+    rec: Recording,
+    family: str,
+    lanes: int,
+    act: Callable[[np.ndarray], np.ndarray],
+    interval_s: float = 0.5,
+    env_name: str = "pednav run",
+) -> tuple[PreparedRecording, dict[str, np.ndarray]]:
+    """Play ``act(obs (lanes, d)) -> (lanes, 4)`` on ``lanes`` lanes of the replay
+    core over ``rec`` (filter family ``family``); return the prepared recording and
+    each knob's values per decision interval and lane, ``(K, lanes)``, for
+    :func:`pednav_env.replay.runner.run_prepared`. A lane whose filter diverged
+    keeps the knobs of that interval (``run_prepared`` holds the last row); the
+    play stops at the end of the recording or when every lane has diverged."""
+    from pednav_env.envs.foot_replay_core import FootReplayConfig, FootReplayCore
+
+    config = FootReplayConfig(decision_interval_s=interval_s, filter_family=family)
+    core = FootReplayCore(config, lanes, env_name, recordings=[rec])
+    core.reset_lanes(np.arange(lanes), [np.random.default_rng(0) for _ in range(lanes)])
+    rows: dict[str, list[np.ndarray]] = {}
+    dead = np.zeros(lanes, dtype=bool)
+    obs = core.obs.copy()
+    while core.cursor[0] < core.length[0] and not dead.all():
+        obs, _, terminated, _, _ = core.step(act(obs))
+        for k, v in core.knob_values().items():
+            row = v.copy()
+            if rows.get(k):
+                row[dead] = rows[k][-1][dead]
+            rows.setdefault(k, []).append(row)
+        dead |= terminated & core.engine.diverged
+    return core.trials[0].prepared, {k: np.array(v) for k, v in rows.items()}
+
+
+def run_named(rec: Recording, policy_name: str, track: bool = False) -> RecordingRun:
+    """``rec`` filtered under a policy name of ``pednav run --policy`` (a fixed
+    setup, or a policy driving the replay core; :func:`resolve_policy`)."""
+    policy = resolve_policy(policy_name)
+    if isinstance(policy, RealFilterSetup):
+        return run_prepared(prepare(rec, policy), track=track)
+    return run_with_policy(rec, policy, track=track)[0]
 
 
 def summarize(rec: Recording, run: RecordingRun) -> dict[str, Any]:

@@ -46,9 +46,7 @@ from agents.gait_rule_real import (
     folds,
     load_fit_recordings,
 )
-from agents.run_recording import run_with_policy, summarize
-from pednav_env.replay.runner import prepare, run_prepared
-from pednav_env.replay.setup import SETUP_NAMES, named_setup
+from agents.run_recording import run_named, summarize
 
 ROOT = Path(__file__).resolve().parents[1]
 FIT = {"generations": 12, "popsize": 10, "sigma0": 0.3, "seed": 1}
@@ -60,12 +58,7 @@ def _progress(gen: int, best: float) -> None:
 
 
 def baseline_error(fr, policy: str) -> float:
-    rec = fr.recording
-    if policy in SETUP_NAMES:
-        run = run_prepared(prepare(rec, named_setup(policy)))
-    else:
-        run = run_with_policy(rec, policy)[0]
-    return float(summarize(rec, run)[fr.metric])
+    return float(summarize(fr.recording, run_named(fr.recording, policy))[fr.metric])
 
 
 def ci_ratio(err: np.ndarray, ref: np.ndarray) -> list[float]:

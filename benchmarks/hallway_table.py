@@ -27,21 +27,13 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.run_recording import check_policies, run_with_policy, summarize
+from agents.run_recording import check_policies, run_named, summarize
 from pednav_env.io import load_recording
 from pednav_env.io.matfile import read_mat
 from pednav_env.replay.metrics import footprint_errors
-from pednav_env.replay.runner import prepare, run_prepared
-from pednav_env.replay.setup import SETUP_NAMES, named_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 ERROR_KEYS = ("footprint_mean_error_m", "footprint_final_error_m", "footprint_final_error_pct")
-
-
-def run_policy(rec, policy: str):
-    if policy in SETUP_NAMES:
-        return run_prepared(prepare(rec, named_setup(policy)))
-    return run_with_policy(rec, policy)[0]
 
 
 def walk_facts(rec) -> dict:
@@ -87,7 +79,7 @@ def main() -> None:
         row = walk_facts(rec)
         row["pyshoe_lstm"] = pyshoe_lstm(path)
         for pol in args.policies:
-            run = run_policy(rec, pol)
+            run = run_named(rec, pol)
             s = summarize(rec, run)
             row[pol] = {k: s[k] for k in ERROR_KEYS + ("distance_m", "stances")}
             row[pol]["diverged"] = bool(run.diverged[0])

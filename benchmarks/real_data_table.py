@@ -26,20 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.run_recording import check_policies, run_with_policy, summarize
+from agents.run_recording import check_policies, run_named, summarize
 from pednav_env.io import find_recordings, load_recording
 from pednav_env.replay.metrics import pyshoe_armse_as_published, track_errors
-from pednav_env.replay.runner import prepare, run_prepared
-from pednav_env.replay.setup import SETUP_NAMES, named_setup
+from pednav_env.replay.runner import prepare
+from pednav_env.replay.setup import named_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 XIO_PUBLISHED_M = {"short_walk": 0.082, "long_walk": 0.421}
-
-
-def run_policy(rec, policy: str):
-    if policy in SETUP_NAMES:
-        return run_prepared(prepare(rec, named_setup(policy)))
-    return run_with_policy(rec, policy)[0]
 
 
 def pyshoe_ratios(rows: list[dict], policies: list[str]) -> dict[str, float]:
@@ -73,7 +67,7 @@ def main() -> None:
             "pyshoe": rec.metadata["pyshoe_trial_error_m"],
         }
         for pol in args.policies:
-            run = run_policy(rec, pol)
+            run = run_named(rec, pol)
             m = track_errors(run.pos[0], run.prepared.truth_pos, run.start_sample)
             m["armse_pyshoe_published_rotation_m"] = pyshoe_armse_as_published(
                 run.pos[0], run.prepared.truth_pos
@@ -86,7 +80,7 @@ def main() -> None:
         rec = load_recording(shared / "xio-gait-tracking" / f"{name}.csv")
         row = {"walk": name, "published_m": XIO_PUBLISHED_M[name]}
         for pol in args.policies:
-            row[pol] = summarize(rec, run_policy(rec, pol))
+            row[pol] = summarize(rec, run_named(rec, pol))
         out["xio"].append(row)
         print(name, {p: round(row[p]["loop_closure_m"], 3) for p in args.policies}, flush=True)
     out["ratio_to_pyshoe_shoe"] = pyshoe_ratios(out["pyshoe"], args.policies)
