@@ -5,13 +5,13 @@ Subcommands (their JSON formats are contracts, see docs/CONTRACTS.md):
 - ``pednav reproduce ID [--runs N] [--seed S] [--json] [--plots DIR]`` — a
   paper's figures beside ours.
 - ``pednav evaluate ENV_ID --policy NAME [NAME ...] --episodes N --seed S
-  [--json] [--plot DIR] [--scenario NAME] [--recordings DIR] [--env-kwarg K=V]
+  [--json] [--plot DIR] [--scenario NAME] [--speed LO HI] [--recordings DIR] [--env-kwarg K=V]
   [--backend serial|ray] [--ray-address A]`` — policies on the same held-out
   episodes.
 - ``pednav train ENV_ID --algo ppo|sac [--timesteps N] [--seed S | --seeds S ...]
   [--n-envs K] [--config FILE] [--run-dir DIR] [--resume] [--backend ...]`` —
   train a tuner (SB3), one run or one per seed.
-- ``pednav tune ENV_ID [--run-dir DIR] [--install] [--backend ...]`` — CMA-ES
+- ``pednav tune ENV_ID [--speed LO HI] [--run-dir DIR] [--install] [--backend ...]`` — CMA-ES
   search of the tuned-fixed baseline (:mod:`agents.cli_tune`).
 - ``pednav run RECORDING|DIR [--format F] [--policy NAME|SETUP.json]
   [--footprints FILE|none] [--json] [--plot FILE] [--out TRACK.csv] [loader

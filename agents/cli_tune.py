@@ -83,6 +83,8 @@ def run_tune(args: argparse.Namespace) -> int:
         result = search(
             args.env_id, action_dim, env_kwargs=env_kwargs, on_generation=advance, **options
         )
+    if args.speed is not None:  # the walks' speed range, readable beside the config's repr
+        result["speed_mps"] = list(args.speed)
     written = [save_result(key, result, run_dir / RESULT_NAME)]
     if args.install:
         written.append(save_result(key, result, RESULTS_FILE))
