@@ -23,6 +23,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.envs.foot_context import grade_code, interval_context
+from pednav_env.envs.foot_features import (
+    masked,
+    masked_moments,
+    update_stance_average,
+    vector_norms,
+)
 from pednav_env.envs.foot_filters import (
     MIN_STANCE_MAX_S,
     PAPER_KNOBS,
@@ -48,7 +54,6 @@ from pednav_env.gait.foot_route import (
 )
 from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
-from pednav_env.nav.detectors import run_lengths
 from pednav_env.nav.zupt_config import ZuptUkfConfig
 from pednav_env.nav.zupt_ukf import ZuptUkf
 from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
@@ -274,15 +279,15 @@ class FootZuptCore:
         ``(T+1, ·)``, stance ``(T,)``) into ``lane``'s buffers; past the end the
         lane stands still at its last position."""
         t = omega_b.shape[0]
-        self.omega[lane] = 0.0
-        self.f[lane] = 0.0
-        self.f[lane, :, 2] = self.config.filter.g
         self.omega[lane, :t] = omega_b
+        self.omega[lane, t:] = 0.0
         self.f[lane, :t] = f_b
+        self.f[lane, t:] = 0.0
+        self.f[lane, t:, 2] = self.config.filter.g
         self.pos[lane, : t + 1] = pos_n
         self.pos[lane, t + 1 :] = pos_n[-1]
-        self.true_stance[lane] = True
         self.true_stance[lane, :t] = stance
+        self.true_stance[lane, t:] = True
         self.distance[lane, : t + 1] = distance_m
         self.distance[lane, t + 1 :] = distance_m[-1]
         self.length[lane] = t
@@ -376,9 +381,11 @@ class FootZuptCore:
         k = self.k
         remaining = self.length - self.cursor
         used = np.clip(remaining, 0, k)
-        idx = self.cursor[:, None] + np.arange(k)[None, :]
-        omega = self.omega[self.lanes[:, None], idx]  # (N, K, 3)
-        f = self.f[self.lanes[:, None], idx]
+        # rows of the interval in the lanes' buffers seen as one (N·cap, ·) array:
+        # np.take of them copies the same values as a two-index gather, 4× faster
+        rows = (self.lanes * self.omega.shape[1] + self.cursor)[:, None] + np.arange(k)
+        omega = np.take(self.omega.reshape(-1, 3), rows, axis=0)  # (N, K, 3)
+        f = np.take(self.f.reshape(-1, 3), rows, axis=0)
         updates0, rejected0 = e.updates.copy(), e.rejected.copy()
         shoe = None
         if self.shoe is not None:
@@ -387,8 +394,10 @@ class FootZuptCore:
         in_walk = np.arange(k)[None, :] < used[:, None]
         start, end = res.start & in_walk, res.end & in_walk
         starts = start.sum(axis=1)
-        true_starts = (start & self.true_stance[self.lanes[:, None], idx]).sum(axis=1)
-        self._stance_durations(res.stance, end)
+        true_starts = (start & np.take(self.true_stance.reshape(-1), rows)).sum(axis=1)
+        self.stance_avg_s, self.stance_len = update_stance_average(
+            self.stance_avg_s, self.stance_len, res.stance, end, self.lane_dt
+        )
         est_end = res.position
         self.cursor += used
         truth = self.pos[self.lanes, self.cursor]
@@ -433,22 +442,6 @@ class FootZuptCore:
         }
         return self.obs.copy(), reward, terminated, truncated, info
 
-    def _stance_durations(self, stance: NDArray[np.bool_], end: NDArray[np.bool_]) -> None:
-        """Moving average (weight 0.2) of the durations of detected stances that
-        ended in the interval, in order; ``stance_len`` carries an open stance."""
-        run = run_lengths(stance, self.stance_len)
-        before = np.concatenate((self.stance_len[:, None], run[:, :-1]), axis=1)
-        self.stance_len = run[:, -1].copy()
-        rank = np.cumsum(end, axis=1)
-        avg = self.stance_avg_s
-        for r in range(1, int(rank[:, -1].max(initial=0)) + 1):
-            hit = end & (rank == r)
-            col = hit.argmax(axis=1)
-            dur = before[self.lanes, col] * self.lane_dt
-            ok = hit.any(axis=1) & (dur > 0)
-            avg = np.where(ok, np.where(avg > 0, 0.8 * avg + 0.2 * dur, dur), avg)
-        self.stance_avg_s = avg
-
     # ------------------------------------------------------------------ observation
     def _features(self, lanes: NDArray[np.integer], interval: dict | None) -> NDArray[np.float32]:
         e = self.engine
@@ -471,16 +464,14 @@ class FootZuptCore:
                 interval["nis_mean"],
             )
         cnt = mask.sum(axis=1)
-        wn = np.linalg.norm(omega, axis=-1)
-        an = np.linalg.norm(f, axis=-1) - g
-        for col, x in ((0, wn), (3, an)):
-            mean = np.where(mask, x, 0).sum(1) / cnt
-            var = np.where(mask, (x - mean[:, None]) ** 2, 0).sum(1) / cnt
-            out[:, col] = mean
-            out[:, col + 1] = np.sqrt(var)
-        out[:, 2] = np.where(mask, wn, 0).max(1)
-        out[:, 5] = np.where(mask, np.abs(an), 0).max(1)
-        out[:, 6] = np.where(mask, detected, False).sum(1) / cnt
+        full = bool(mask.all())
+        wn = vector_norms(omega)
+        an = vector_norms(f) - g
+        out[:, 0], out[:, 1] = masked_moments(wn, mask, cnt, full)
+        out[:, 3], out[:, 4] = masked_moments(an, mask, cnt, full)
+        out[:, 2] = masked(wn, mask, full).max(1)
+        out[:, 5] = masked(np.abs(an), mask, full).max(1)
+        out[:, 6] = masked(detected, mask, full).sum(1) / cnt
         out[:, 7] = starts
         out[:, 8] = self.stance_avg_s[lanes]
         out[:, 9] = e.time_since_update_s[lanes]
