@@ -21,6 +21,11 @@ a constant as a ``pednav tune`` run directory) on
   first fit's simulated choice's noise scales; its per-walk errors as stored, and
   recomputed here as a check); target ≤ 1.5 (R_hall).
 
+A seed-spread study (the same searches with other CMA-ES seeds; not the protocol's
+choice) runs through the same script: ``--choices
+benchmarks/results/transfer_by_regime_seeds_choices.json --out
+benchmarks/results/transfer_by_regime_seeds.json`` (regimes named ``room_seedS``).
+
 Each ratio of means gets a 95 % interval from ``scipy.stats.bootstrap`` over the
 recordings, paired, 10 000 resamples, seed 0, BCa (percentile where BCa fails, said
 so in the output). A target counts as met only when the interval's upper end is
@@ -167,8 +172,11 @@ def main() -> None:
                 **ci,
                 "target": target,
             }
+            regime = label.partition("_seed")[0]  # a seed-spread study's "room_seed2"
             if label in (target_regime, "tuned"):
                 row["verdict"] = verdict(ci, target)
+            elif regime == target_regime:
+                row["verdict"] = f"{verdict(ci, target)} (seed study, not the choice)"
             else:
                 row["verdict"] = "information only (the other set's regime)"
             table.append(row)
