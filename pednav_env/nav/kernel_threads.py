@@ -1,34 +1,50 @@
 """What the threads of the compiled ZUPT kernel need (:mod:`pednav_env.nav.zupt_kernel`).
 
-:func:`pednav_env.nav.zupt_kernel.advance_block` runs its walkers on numba's
-threads (:func:`thread_parts`: ``NUMBA_NUM_THREADS``, default all cores, or
-:func:`numba.set_num_threads`). Each thread takes the next walker from a shared
-counter (:func:`fetch_add`) until none is left, so a thread held up by other
-work on its core leaves more walkers to the others. Each thread has its own
-scratch arrays, a :class:`SampleScratch` and a :class:`ZuptScratch`, which serve
-its walkers one after the other. A walker writes each entry before it reads it (its
-preintegrals restart at its first anchor, a ZUPT fills its arrays before it
-uses them; the Cholesky factor's upper triangle stays zero), so no value passes
-from one walker to the next: a walker's arithmetic does not depend on which
-thread runs it or on which walker ran before (tests/nav/test_kernel_threads.py:
-one thread and two give identical outputs; lanes equal scalar envs bit for bit).
+:func:`pednav_env.nav.zupt_kernel.advance_block` runs its walkers on the calling
+thread and helper threads together (:func:`thread_parts` of them in all:
+numba's thread count, ``NUMBA_NUM_THREADS``, default all cores, or
+:func:`numba.set_num_threads`). Each thread runs the compiled
+:func:`pednav_env.nav.zupt_kernel.advance_share` without the GIL and takes the
+next walker from a shared counter (:func:`fetch_add`) until none is left, so a
+thread held up by other work on its core leaves more walkers to the others.
+Each thread has its own scratch arrays, a :class:`SampleScratch` and a
+:class:`ZuptScratch`, which serve its walkers one after the other. A walker
+writes each entry before it reads it (its preintegrals restart at its first
+anchor, a ZUPT fills its arrays before it uses them; the Cholesky factor's upper
+triangle stays zero), so no value passes from one walker to the next: a walker's
+arithmetic does not depend on which thread runs it or on which walker ran before
+(tests/nav/test_kernel_threads.py: one thread and two give identical outputs;
+lanes equal scalar envs bit for bit).
 
 The update log is filled walker by walker in the serial kernel. With threads,
 walker i writes its rows from row i·K on (K samples in the block, at most one
 ZUPT per sample), and :func:`compact_log` closes the gaps afterwards, which
 gives the serial kernel's rows in the serial kernel's order.
 
-The threads are numba's own work queue (threading layer ``workqueue``) unless
-``NUMBA_THREADING_LAYER`` or ``numba.config.THREADING_LAYER`` names another by the
-time this module is imported: its idle threads sleep, where those of
-GNU OpenMP (numba's first choice on Linux without TBB) spin, which on a busy
-machine made the kernel slower on two threads than on one (docs/PERFORMANCE.md);
-it is also safe under ``fork``, GNU OpenMP is not. The layer is chosen for the
-whole process at its first parallel call.
+Why the calling thread works too (:class:`SharedRun`), rather than a numba
+``prange`` loop on numba's thread pool, which this module used before: a
+parallel region's caller only waits, and on this project's 2-core virtual
+machine a pool thread that has slept through the env's serial work between two
+kernel calls often starts late, by milliseconds, or not before the others have
+finished; the paper family's kernel then gained nothing from two threads in the
+env (docs/PERFORMANCE.md). The caller starts at once, so a late helper costs at
+most the time of the serial kernel. The helpers are Python threads started on
+first use (again after a ``fork``), waiting for work on a queue; one run at a
+time uses them (:meth:`SharedRun.acquire`), another caller meanwhile runs the
+serial kernel.
+
+numba's threading layer is set to its own work queue (``workqueue``) unless
+``NUMBA_THREADING_LAYER`` or ``numba.config.THREADING_LAYER`` names another by
+the time this module is imported: the kernel no longer uses numba's threads,
+but other parallel code in the process would, and GNU OpenMP's idle threads spin.
 """
 
 from __future__ import annotations
 
+import os
+import queue
+import threading
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numba
@@ -49,6 +65,76 @@ def thread_parts(num_walkers: int) -> int:
     """Threads the walkers are run on: numba's thread count, at most one per
     walker; 1 means the serial kernel."""
     return max(1, min(int(num_walkers), numba.get_num_threads()))
+
+
+class SharedRun:
+    """The calling thread and helper threads running one compiled function's shares
+    of a block together (module docstring)."""
+
+    def __init__(self) -> None:
+        self.pid = -1
+        self.start()
+
+    def start(self) -> None:
+        """No helpers yet, fresh queues and lock (also in a forked child, which
+        inherits none of the parent's threads)."""
+        self.pid = os.getpid()
+        self.lock = threading.Lock()
+        self.jobs: queue.SimpleQueue = queue.SimpleQueue()
+        self.done: queue.SimpleQueue = queue.SimpleQueue()
+        self.helpers: list[threading.Thread] = []
+
+    def acquire(self) -> bool:
+        """Take the helpers for one run; False when another run has them."""
+        if self.pid != os.getpid():
+            self.start()
+        return self.lock.acquire(blocking=False)
+
+    def release(self) -> None:
+        self.lock.release()
+
+    def run(self, share: Callable[..., Any], args: tuple, parts: int) -> int:
+        """``share(*args, taken, logged)`` (:func:`pednav_env.nav.zupt_kernel.advance_share`)
+        on this thread and ``parts − 1`` helpers, all drawing walkers from one counter;
+        then the update log closed up (:func:`compact_log`). Returns its row count.
+        ``args`` are :func:`~pednav_env.nav.zupt_kernel.advance_block`'s."""
+        block, log = args[0], args[-1]
+        n, k = block.omega.shape[0], block.omega.shape[1]
+        region = k if log.index.shape[0] > 0 else 0
+        logged = np.zeros(n, dtype=np.int64)
+        taken = np.zeros(1, dtype=np.int64)  # walkers handed out so far
+        job = (*args, taken, logged)
+        while len(self.helpers) < parts - 1:
+            helper = threading.Thread(target=serve, args=(self.jobs, self.done), daemon=True)
+            helper.start()
+            self.helpers.append(helper)
+        for _ in range(parts - 1):
+            self.jobs.put((share, job))
+        errors = []
+        try:
+            share(*job)
+        finally:  # the helpers write into the arrays until they report
+            errors = [e for e in (self.done.get() for _ in range(parts - 1)) if e is not None]
+        if errors:
+            raise errors[0]
+        return compact_log(log.index, log.x, log.P, log.nis, logged, region)
+
+
+def serve(jobs: queue.SimpleQueue, done: queue.SimpleQueue) -> None:
+    """A helper thread: run each ``(function, arguments)`` of ``jobs``, then put None
+    (or the exception raised) on ``done``."""
+    while True:
+        share, job = jobs.get()
+        try:
+            share(*job)
+        except BaseException as exc:  # reported to the caller, which raises it
+            done.put(exc)
+        else:
+            done.put(None)
+
+
+#: The process's helper threads of the ZUPT kernel.
+SHARED_RUN = SharedRun()
 
 
 @intrinsic

@@ -1,9 +1,10 @@
 """Compiled per-walker kernel of the ZUPT-UKF of paper 003.
 
 :meth:`pednav_env.nav.zupt_ukf.ZuptUkf.advance` hands a whole block of K IMU
-samples of all N walkers to :func:`advance_block`, which runs each walker (on
-numba's threads, :mod:`pednav_env.nav.kernel_threads`) sample after sample
-through the filter of :mod:`pednav_env.nav.zupt_ukf`'s docstring. Per sample j:
+samples of all N walkers to :func:`advance_block`, which runs each walker (on the
+calling thread and helper threads, :mod:`pednav_env.nav.kernel_threads`) sample
+after sample through the filter of :mod:`pednav_env.nav.zupt_ukf`'s docstring.
+Per sample j:
 
 1. :func:`pednav_env.nav.preintegration.strapdown_increment`: the strapdown
    increments of paper 003 eq (3) (attitude increment C(Δq), Δq from
@@ -55,13 +56,13 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from pednav_env.nav.detector_kernel import Eq5Thresholds, detect, stance_logic
 from pednav_env.nav.kernel_threads import (
+    SHARED_RUN,
     SampleScratch,
     ZuptScratch,
-    compact_log,
     fetch_add,
     new_sample_scratch,
     new_zupt_scratch,
@@ -436,13 +437,19 @@ def advance_block(
     index and last accepted ZUPT of each walker, and, when their arrays are
     not empty, the mean position / state after every sample; ``log`` (when not
     empty, room for N·K rows) every ZUPT, walker by walker. Returns the number
-    of logged ZUPTs. On numba's threads (:func:`advance_parts`), or walker after
-    walker with one thread or one walker (:func:`advance_serial`): the same outputs.
+    of logged ZUPTs. On this thread and helper threads together
+    (:func:`advance_share`, :mod:`pednav_env.nav.kernel_threads`), or walker after
+    walker with one thread, one walker or the helpers busy (:func:`advance_serial`):
+    the same outputs.
     """
+    args = (block, settings, knobs, model, filters, detector, out, log)
     parts = thread_parts(block.omega.shape[0])
-    if parts == 1:
-        return advance_serial(block, settings, knobs, model, filters, detector, out, log)
-    return advance_parts(block, settings, knobs, model, filters, detector, out, log, parts)
+    if parts > 1 and SHARED_RUN.acquire():
+        try:
+            return SHARED_RUN.run(advance_share, args, parts)
+        finally:
+            SHARED_RUN.release()
+    return advance_serial(*args)
 
 
 @njit(cache=True)
@@ -467,8 +474,8 @@ def advance_serial(
     return n_log
 
 
-@njit(cache=True, parallel=True)
-def advance_parts(
+@njit(cache=True, nogil=True)
+def advance_share(
     block: BlockInput,
     settings: KernelSettings,
     knobs: WalkerKnobs,
@@ -477,24 +484,24 @@ def advance_parts(
     detector: DetectorState,
     out: BlockOutput,
     log: UpdateLog,
-    parts: int,
+    taken: np.ndarray,
+    logged: np.ndarray,
 ) -> int:
-    """:func:`advance_block` on ``parts`` threads, each with its own scratch, taking
-    walkers one at a time from a shared counter; walker i writes only its own rows,
-    its log rows from i·K on, closed up afterwards (:mod:`pednav_env.nav.kernel_threads`)."""
+    """One thread's share of :func:`advance_block` (several threads call it at once,
+    without the GIL: :class:`pednav_env.nav.kernel_threads.SharedRun`): walkers taken
+    one at a time from the shared counter ``taken`` (1,) until none is left, with this
+    thread's own scratch; walker i writes only its own rows and its log rows from
+    i·K on (when logging), their count in ``logged[i]``."""
     n, k = block.omega.shape[0], block.omega.shape[1]
     region = k if log.index.shape[0] > 0 else 0  # log rows of a walker
-    logged = np.zeros(n, dtype=np.int64)
-    taken = np.zeros(1, dtype=np.int64)  # walkers handed out so far
-    for _ in prange(parts):
-        ss = new_sample_scratch()
-        zs = new_zupt_scratch(model.Wm.shape[0], model.q_basis.shape[0])
+    ss = new_sample_scratch()
+    zs = new_zupt_scratch(model.Wm.shape[0], model.q_basis.shape[0])
+    i = fetch_add(taken, 1)
+    while i < n:
+        first = i * region
+        last = advance_walker(
+            i, block, settings, knobs, model, filters, detector, out, log, first, ss, zs
+        )
+        logged[i] = last - first
         i = fetch_add(taken, 1)
-        while i < n:
-            first = i * region
-            last = advance_walker(
-                i, block, settings, knobs, model, filters, detector, out, log, first, ss, zs
-            )
-            logged[i] = last - first
-            i = fetch_add(taken, 1)
-    return compact_log(log.index, log.x, log.P, log.nis, logged, region)
+    return 0

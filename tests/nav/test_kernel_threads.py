@@ -1,8 +1,11 @@
-"""The compiled ZUPT kernel on numba's threads (nav.zupt_kernel, nav.kernel_threads):
+"""The compiled ZUPT kernel on several threads (nav.zupt_kernel, nav.kernel_threads):
 one thread (the serial kernel) and two give the same outputs bit for bit, and the
-update log lists the same ZUPTs in the same order (walker by walker)."""
+update log lists the same ZUPTs in the same order (walker by walker); so do two
+engines advanced from two Python threads at once, and a forked child process."""
 
+import multiprocessing
 import os
+import threading
 from dataclasses import fields
 
 import numba
@@ -109,3 +112,58 @@ def test_threads_take_each_walker_once():
         numba.set_num_threads(before)
     assert count.min() == count.max() == 1
     assert taken[0] == n + 2  # each thread's last claim finds none left
+
+
+def _two_thread_run(family, omega, f):
+    eng, run = run_with_threads(2, family, omega, f)
+    return run.x, eng.P, len(eng.history)
+
+
+def test_two_engines_from_two_python_threads_at_once(paper_walk):
+    """The kernel runs without the GIL: two engines advanced from two Python threads
+    at the same time (one has the helper threads, the other runs serially while they
+    are taken, or after) give each its own sequential run's outputs."""
+    imu = foot_imu(paper_walk, WALKERS, seed=5, spec=ImuSpec.consumer())
+    inputs = [
+        (imu.omega_b.copy(), imu.f_b.copy()),
+        (imu.omega_b[::-1].copy(), imu.f_b[::-1].copy()),
+    ]
+    alone = [_two_thread_run("shoe", o, f) for o, f in inputs]
+    together: list = [None, None]
+
+    def work(j):
+        together[j] = _two_thread_run("shoe", *inputs[j])
+
+    threads = [threading.Thread(target=work, args=(j,)) for j in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for one, two in zip(alone, together, strict=True):
+        np.testing.assert_array_equal(two[0], one[0])
+        np.testing.assert_array_equal(two[1], one[1])
+        assert two[2] == one[2] > 0
+
+
+def _child(conn, family, omega, f):
+    x, P, count = _two_thread_run(family, omega, f)
+    conn.send((x, P, count))
+
+
+def test_a_forked_child_runs_the_threaded_kernel(paper_walk):
+    """After a fork (the helper threads are not inherited) the child starts its own
+    and gives the parent's outputs."""
+    imu = foot_imu(paper_walk, WALKERS, seed=6, spec=ImuSpec.consumer())
+    omega, f = imu.omega_b.copy(), imu.f_b.copy()
+    x, P, count = _two_thread_run("paper", omega, f)  # the parent's helpers exist
+    parent, child = multiprocessing.get_context("fork").Pipe()
+    proc = multiprocessing.get_context("fork").Process(
+        target=_child, args=(child, "paper", omega, f)
+    )
+    proc.start()
+    assert parent.poll(120), "the forked child did not answer"
+    x2, P2, count2 = parent.recv()
+    proc.join(30)
+    np.testing.assert_array_equal(x2, x)
+    np.testing.assert_array_equal(P2, P)
+    assert count2 == count
