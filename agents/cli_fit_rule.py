@@ -22,6 +22,8 @@ def run_fit_rule(args: argparse.Namespace) -> int:
         raise ValueError(f"--out {out_dir}: not a directory")
     if args.folds == 1 or args.folds < 0:
         raise ValueError(f"--folds: 0 (no cross-validation) or at least 2, got {args.folds}")
+    if args.simulated_episodes < 0:
+        raise ValueError(f"--simulated-episodes: must be ≥ 0, got {args.simulated_episodes}")
     recs = load_fit_recordings(args.recordings)
     held = folds(recs, args.folds) if args.folds else None
     settings = {
@@ -29,6 +31,8 @@ def run_fit_rule(args: argparse.Namespace) -> int:
         "popsize": args.popsize,
         "sigma0": args.sigma0,
         "seed": args.seed,
+        "simulated_episodes": args.simulated_episodes,
+        "constant": args.constant,
     }
     total = args.generations * (1 + (args.folds or 0))
     with progress_bar("fitting the gait rule", total, wanted(args.json)) as advance:
@@ -44,7 +48,8 @@ def run_fit_rule(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({"path": str(path), "c": list(params.c), **record}))
         return 0
-    print(f"wrote {path}: c = {[round(v, 4) for v in params.c]}")
+    kind = "constant (slope held at 0)" if args.constant else "rule"
+    print(f"wrote {path} ({kind}): c = {[round(v, 4) for v in params.c]}")
     print(
         f"objective (mean over groups of mean log10 error): {record['objective_log10_m']:.4f} "
         f"(start {record['start_objective_log10_m']:.4f})"
@@ -79,5 +84,19 @@ def add_fit_rule_command(sub: argparse._SubParsersAction) -> None:
     fr.add_argument("--popsize", type=positive_int, default=10, help="candidates per generation")
     fr.add_argument("--sigma0", type=positive_float, default=0.3, help="CMA-ES initial step")
     fr.add_argument("--seed", type=int, default=1, help="CMA-ES seed")
+    fr.add_argument(
+        "--simulated-episodes",
+        type=int,
+        default=0,
+        metavar="N",
+        help="add a group of N calibrated simulated walks to the objective (covers gaits "
+        "the recordings lack, e.g. running; the shipped rule used 16; default 0)",
+    )
+    fr.add_argument(
+        "--constant",
+        action="store_true",
+        help="fit the best constant SHOE configuration instead (slope held at 0): the "
+        "comparator for what adapting adds",
+    )
     fr.add_argument("--json", action="store_true", help="print the result as one JSON object")
     fr.set_defaults(func=run_fit_rule)

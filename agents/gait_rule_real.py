@@ -53,6 +53,8 @@ ARMSE_KEY = "armse_pyshoe_m"
 #: The group of the simulated walks in the objective.
 SIMULATED_GROUP = "simulated"
 FOOTPRINT_KEY = "footprint_mean_error_m"
+#: Index of the slope c1 in the rule's parameters (held at 0 by ``constant``).
+SLOPE_INDEX = 1
 
 
 @dataclass(frozen=True)
@@ -178,12 +180,16 @@ def fit(
     progress: Callable[[int, float], None] | None = None,
     simulated_episodes: int = 0,
     episode_set: int = 0,
+    constant: bool = False,
 ) -> tuple[GaitRuleParams, dict[str, Any]]:
     """CMA-ES over the rule's parameters on ``recs`` (module docstring); returns
     the parameters and the fit's record. ``simulated_episodes`` > 0 adds a group of
     that many calibrated simulated training walks (search episode set
     ``episode_set``, :func:`pednav_env.seeds.search_seeds`), which covers gaits the
-    recordings may lack (running)."""
+    recordings may lack (running). ``constant``: the slope c1 is held at 0 and
+    CMA-ES searches the other four parameters: the best constant SHOE
+    configuration (γ, window, Q, R) by the same objective, the comparator that
+    says what adapting γ to the gait adds."""
     import cma
 
     if not recs:
@@ -195,19 +201,28 @@ def fit(
     base = base or GaitRuleParams(c=(0.0,) * N_PARAMS)
     sim = search_seeds(episode_set, simulated_episodes) if simulated_episodes else []
     groups = [r.group for r in recs] + [SIMULATED_GROUP] * len(sim)
-    x0 = tuned_start()
+    x0 = tuned_start()  # slope x1 = 0
+    free = np.array([i for i in range(N_PARAMS) if not (constant and i == SLOPE_INDEX)])
+
+    def full(x: np.ndarray) -> np.ndarray:
+        """Search points in the free coordinates → all five (the slope at x0's 0)."""
+        out = np.tile(x0, (len(x), 1))
+        out[:, free] = x
+        return out
+
     es = cma.CMAEvolutionStrategy(
-        x0, sigma0, {"bounds": [-1.0, 1.0], "popsize": popsize, "seed": seed, "verbose": -9}
+        x0[free], sigma0, {"bounds": [-1.0, 1.0], "popsize": popsize, "seed": seed, "verbose": -9}
     )
     start, history = time.perf_counter(), []
     for g in range(generations):
-        xs = np.clip(np.asarray(es.ask()), -1.0, 1.0)
+        xs_free = np.clip(np.asarray(es.ask()), -1.0, 1.0)
+        xs = full(xs_free)
         scores = objective(errors_matrix(recs, to_params(xs), base, sim), groups)
-        es.tell(list(xs), scores.tolist())
+        es.tell(list(xs_free), scores.tolist())
         history.append(float(scores.min()))
         if progress is not None:
             progress(g + 1, float(scores.min()))
-    best = np.clip(np.asarray(es.result.xbest), -1.0, 1.0)
+    best = full(np.clip(np.asarray(es.result.xbest), -1.0, 1.0)[None, :])[0]
     both = errors_matrix(recs, to_params(np.stack([best, x0])), base, sim)
     scores = objective(both, groups)
     kept_start = bool(scores[1] < scores[0])  # the start itself is not a CMA-ES candidate
@@ -229,6 +244,7 @@ def fit(
         "popsize": popsize,
         "sigma0": sigma0,
         "cma_seed": seed,
+        "constant": constant,
         "initial_c": to_params(x0).tolist(),
         "best_per_generation_log10_m": history,
         "seconds": round(time.perf_counter() - start, 1),

@@ -84,7 +84,7 @@ def summary(out: dict, recs) -> dict:
     armse = np.array([r.metric == ARMSE_KEY for r in recs])
     cols = {}
     sims = {"_" + k.split("_", 1)[1] for k in out if k.split("_")[0] in ("cv", "lodo", "all")}
-    for suffix in ("", *sorted(s for s in sims if s.startswith("_sim"))):
+    for suffix in ("", *sorted(s for s in sims if s.startswith(("_sim", "_const")))):
         for k in ("cv", "lodo"):
             if k + suffix in out:
                 cols[k + suffix] = out[k + suffix]["held_out_errors_m"]
@@ -108,6 +108,30 @@ def summary(out: dict, recs) -> dict:
             "hallway_mean_ci95": ci_mean(h),
             "hallway_median_m": float(np.median(h)),
         }
+    return res
+
+
+def rule_vs_constant(out: dict, recs) -> dict:
+    """Held-out errors of the rule against the constant fitted the same way (each
+    ``cv*`` stage with a ``*_const`` twin), per data set: ratio of means and its
+    paired 95 % bootstrap interval over recordings."""
+    res: dict = {}
+    for key in sorted(k for k in out if k.startswith("cv") and not k.endswith("_const")):
+        if key + "_const" not in out:
+            continue
+        rule, const = out[key]["held_out_errors_m"], out[key + "_const"]["held_out_errors_m"]
+        for metric, label in ((ARMSE_KEY, "PyShoe ARMSE"), ("footprint_mean_error_m", "hallway")):
+            names = [r.name for r in recs if r.metric == metric]
+            a = np.array([rule[n] for n in names])
+            b = np.array([const[n] for n in names])
+            res[f"{key} {label}"] = {
+                "ratio": float(a.mean() / b.mean()),
+                "ratio_ci95": ci_ratio(a, b),
+                "rule_mean_m": float(a.mean()),
+                "constant_mean_m": float(b.mean()),
+                "rule_lower": int(np.sum(a < b)),
+                "recordings": len(names),
+            }
     return res
 
 
@@ -142,10 +166,16 @@ def main() -> None:
         help="add a group of N calibrated simulated training walks to every fit "
         "(results under the stage names + '_simN')",
     )
+    ap.add_argument(
+        "--constant",
+        action="store_true",
+        help="fit the best constant instead of the rule (slope held at 0; results under "
+        "the stage names + '_const'): the comparator for what adapting adds",
+    )
     args = ap.parse_args()
     sim = args.simulated_episodes
-    suffix = f"_sim{sim}" if sim else ""
-    fit_settings = {**FIT, "simulated_episodes": sim}
+    suffix = (f"_sim{sim}" if sim else "") + ("_const" if args.constant else "")
+    fit_settings = {**FIT, "simulated_episodes": sim, "constant": args.constant}
     shared = Path(args.shared)
     hallway = sorted((shared / "hallway-gcp-dev").glob("*_LLIO.mat"))
     recs = load_fit_recordings([shared / "pyshoe-vicon-dev", *hallway])
@@ -186,9 +216,17 @@ def main() -> None:
         write_params(params, Path(args.out + suffix) / "gait_rule.json", record)
         save()
     out["summary"] = summary(out, recs)
+    out["rule_vs_constant"] = rule_vs_constant(out, recs)
     out["seconds_last_run"] = round(time.time() - t0, 1)
     save()
     print_summary(out["summary"])
+    for key, m in out["rule_vs_constant"].items():
+        lo, hi = m["ratio_ci95"]
+        print(
+            f"held-out {key}: rule / constant {m['ratio']:.3f} [{lo:.3f}, {hi:.3f}] "
+            f"({m['rule_mean_m']:.4f} m against {m['constant_mean_m']:.4f} m; "
+            f"rule lower on {m['rule_lower']}/{m['recordings']})"
+        )
 
 
 if __name__ == "__main__":

@@ -116,6 +116,17 @@ def test_fit_is_never_worse_than_its_start():
         fit(recs, simulated_episodes=-1)
 
 
+def test_constant_fit_holds_the_slope_at_zero_and_searches_the_rest():
+    recs = load_fit_recordings([PYSHOE_SAMPLE, HALLWAY_MAT])
+    params, record = fit(recs, generations=2, popsize=3, seed=3, constant=True)
+    assert params.c[1] == 0.0 and record["constant"] is True
+    assert record["objective_log10_m"] <= record["start_objective_log10_m"]
+    if not record["kept_start"]:
+        assert params.c != tuple(record["initial_c"])
+    rule, _ = fit(recs, generations=2, popsize=3, seed=3)
+    assert rule.c[1] != 0.0  # without the flag the slope is searched
+
+
 def test_cli_writes_a_rule_that_pednav_run_plays(tmp_path, capsys):
     out = tmp_path / "fit"
     argv = ["fit-rule", str(PYSHOE_SAMPLE), str(HALLWAY_MAT), "--out", str(out)]
@@ -126,6 +137,11 @@ def test_cli_writes_a_rule_that_pednav_run_plays(tmp_path, capsys):
     assert main(["run", str(PYSHOE_SAMPLE), "--policy", str(out / "gait_rule.json"), "--json"]) == 0
     armse = json.loads(capsys.readouterr().out)[ARMSE_KEY]
     assert armse == pytest.approx(printed["errors_m"][PYSHOE_SAMPLE.stem], abs=1e-5)
+    const = tmp_path / "const"
+    argv = ["fit-rule", str(PYSHOE_SAMPLE), "--out", str(const), "--constant", "--json"]
+    assert main([*argv, "--generations", "1", "--popsize", "2"]) == 0
+    assert json.loads(capsys.readouterr().out)["c"][1] == 0.0
+    assert read_params(const / "gait_rule.json").c[1] == 0.0
 
 
 @pytest.mark.parametrize(
@@ -133,6 +149,7 @@ def test_cli_writes_a_rule_that_pednav_run_plays(tmp_path, capsys):
     [
         (["--folds", "1"], "--folds: 0 .* or at least 2, got 1"),
         (["--folds", "3"], "group 'replay' has 1 recordings, fewer than 3"),
+        (["--simulated-episodes", "-1"], "--simulated-episodes: must be ≥ 0, got -1"),
     ],
 )
 def test_cli_bad_options_give_one_line(tmp_path, capsys, extra, message):
