@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 from hallway_table import pyshoe_lstm
 from scipy import stats
+from transfer_by_regime import paired_ratio_ci
 
 from agents.gait_rule import write_params
 from agents.gait_rule_real import (
@@ -62,16 +63,8 @@ def baseline_error(fr, policy: str) -> float:
 
 
 def ci_ratio(err: np.ndarray, ref: np.ndarray) -> list[float]:
-    res = stats.bootstrap(
-        (err, ref),
-        lambda a, b: np.mean(a) / np.mean(b),
-        paired=True,
-        vectorized=False,
-        n_resamples=10_000,
-        random_state=0,
-        method="percentile",
-    )
-    return [float(res.confidence_interval.low), float(res.confidence_interval.high)]
+    """Paired percentile interval of mean(err) / mean(ref) (this protocol's method)."""
+    return paired_ratio_ci(err, ref, ("percentile",))["ci95"]
 
 
 def ci_mean(err: np.ndarray) -> list[float]:

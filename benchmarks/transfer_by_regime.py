@@ -66,12 +66,15 @@ def ratio_of_means(a: np.ndarray, b: np.ndarray, axis: int = -1) -> np.ndarray:
     return np.mean(a, axis=axis) / np.mean(b, axis=axis)
 
 
-def paired_ratio_ci(a: list[float], b: list[float]) -> dict:
+def paired_ratio_ci(
+    a: list[float], b: list[float], methods: tuple[str, ...] = ("BCa", "percentile")
+) -> dict:
     """The ratio of means of ``a`` over ``b`` (paired by recording) with its 95 %
-    bootstrap interval (BCa; percentile if BCa gives no finite interval)."""
+    bootstrap interval by the first of ``methods`` that gives a finite one (default
+    BCa, else percentile)."""
     x, y = np.asarray(a, float), np.asarray(b, float)
     out: dict = {"ratio": float(ratio_of_means(x, y))}
-    for method in ("BCa", "percentile"):
+    for method in methods:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             res = stats.bootstrap(
@@ -87,7 +90,7 @@ def paired_ratio_ci(a: list[float], b: list[float]) -> dict:
         lo, hi = float(res.confidence_interval.low), float(res.confidence_interval.high)
         if np.isfinite(lo) and np.isfinite(hi):
             return {**out, "ci95": [lo, hi], "method": method}
-    return {**out, "ci95": [float("nan"), float("nan")], "method": "none (both failed)"}
+    return {**out, "ci95": [float("nan"), float("nan")], "method": "none (all failed)"}
 
 
 def verdict(ci: dict, target: float) -> str:
