@@ -158,7 +158,7 @@ def _thread_env() -> dict[str, str]:
     from a process started with several threads, even when both train on one
     thread (:func:`one_torch_thread`). Workers get this process's setting instead.
     Each task reserves one CPU, so the foot env's compiled kernel, which runs its
-    walkers on numba's thread count of threads, runs on one thread in a worker
+    walkers on as many threads as numba is given, runs on one thread in a worker
     (``NUMBA_NUM_THREADS=1``; its results do not depend on the thread count,
     :mod:`pednav_env.nav.kernel_threads`).
     """

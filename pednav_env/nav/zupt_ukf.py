@@ -22,7 +22,8 @@ vertical specific force of eq (5) through the corrected attitude.
 :meth:`ZuptUkf.step` is the same call with K = 1, and the result depends on
 the blocking only through rounding (tested).
 
-Divergence (a non-finite state or a speed above :data:`DIVERGENCE_SPEED` of
+Divergence (a non-finite state or a speed above
+:data:`pednav_env.nav.zupt_results.DIVERGENCE_SPEED` of
 the central sigma point) is checked on the prior of every ZUPT and at every
 sample after a walker's last ZUPT of the block; a diverged walker gets no more
 ZUPTs and is frozen at its last posterior.
@@ -38,8 +39,6 @@ choices (Q, R, gating, angle-sum forms): :mod:`pednav_env.nav.zupt_config`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,7 +54,8 @@ from pednav_env.nav.detectors import (
 from pednav_env.nav.ukf import repair_covariance
 from pednav_env.nav.zupt_algebra import redraw_sigmas
 from pednav_env.nav.zupt_config import UpdateMode, ZuptUkfConfig
-from pednav_env.nav.zupt_kernel import (
+from pednav_env.nav.zupt_kernel import advance_block
+from pednav_env.nav.zupt_kernel_args import (
     BlockInput,
     BlockOutput,
     KernelSettings,
@@ -63,74 +63,22 @@ from pednav_env.nav.zupt_kernel import (
     UpdateLog,
     WalkerFilters,
     WalkerKnobs,
-    advance_block,
     new_block_output,
     new_detector_state,
     new_update_log,
 )
 from pednav_env.nav.zupt_model import STATE_DIM, dcm_to_state, process_noise_basis, state_mean
+from pednav_env.nav.zupt_results import (
+    DIVERGENCE_SPEED,
+    RUN_BLOCK,
+    UPDATE_KINDS,
+    BlockResult,
+    UpdateRecord,
+    ZuptRun,
+    ZuptTallies,
+)
 
 Array = NDArray[np.float64]
-
-#: Velocity norm beyond which a walker is declared diverged (m/s).
-DIVERGENCE_SPEED = 50.0
-#: Samples per :meth:`ZuptUkf.advance` call in :meth:`ZuptUkf.run`.
-RUN_BLOCK = 100
-#: Kinds of ZUPT in :class:`UpdateRecord`, by the kernel's code.
-_KINDS = ("start", "end", "stance")
-
-
-@dataclass
-class UpdateRecord:
-    """One ZUPT of one walker (kept when ``record_updates`` is on; within a block the
-    records come walker by walker, each walker's in time order)."""
-
-    walker: int
-    sample: int
-    kind: str  # "start", "end" or "stance"
-    x_prior: Array
-    P_prior: Array
-    x: Array
-    P: Array
-    nis: float
-    accepted: bool
-
-
-@dataclass(frozen=True)
-class BlockResult:
-    """Output of :meth:`ZuptUkf.advance` over a block of K samples."""
-
-    stance: NDArray[np.bool_]  # (N, K) detected stance after each sample
-    start: NDArray[np.bool_]  # (N, K) stance declared at the sample
-    end: NDArray[np.bool_]  # (N, K) stance ended at the sample
-    accepted: NDArray[np.int64]  # (N,) ZUPTs applied in the block
-    nis_log_sum: Array  # (N,) Σ log(1 + NIS) of those ZUPTs
-    position: Array  # (N, 3) mean position (m) after each walker's valid samples
-    positions: Array | None  # (N, K, 3) mean position after each sample (record)
-    states: Array | None  # (N, K, 9) mean state after each sample (record="state")
-
-
-@dataclass
-class ZuptRun:
-    """Output of :meth:`ZuptUkf.run` over whole records."""
-
-    x: Array  # (N, T+1, 9) mean state on the sample grid (held at x₀ during alignment)
-    start_sample: int  # first sample filtered (= alignment window length)
-    stance: NDArray[np.bool_]  # (N, T) detected stance per sample
-    updates: NDArray[np.int64]  # (N,) ZUPTs applied
-    rejected: NDArray[np.int64]  # (N,) ZUPTs rejected by the gate
-    repairs: NDArray[np.int64]  # (N,) covariance repairs
-    diverged: NDArray[np.bool_]  # (N,)
-    P_final: Array  # (N, 9, 9)
-
-
-class ZuptTallies(NamedTuple):
-    """Per-walker counts of :class:`ZuptUkf` (copies)."""
-
-    updates: NDArray[np.int64]  # (N,) ZUPTs applied
-    rejected: NDArray[np.int64]  # (N,) ZUPTs rejected by the gate
-    repairs: NDArray[np.int64]  # (N,) covariance repairs
-    diverged: NDArray[np.bool_]  # (N,)
 
 
 class ZuptUkf:
@@ -398,7 +346,7 @@ class ZuptUkf:
                 UpdateRecord(
                     int(w),
                     int(self.sample[w] + j),
-                    _KINDS[kind],
+                    UPDATE_KINDS[kind],
                     xs[0].copy(),
                     Ps[0].copy(),
                     xs[1].copy(),

@@ -32,7 +32,8 @@ from pednav_env.gait.foot import FootTrajectory, simulate_foot
 from pednav_env.gait.foot_route import paper_stride_shape, square_route
 from pednav_env.nav.detectors import ThresholdDetectorConfig
 from pednav_env.nav.zupt_config import ZuptUkfConfig
-from pednav_env.nav.zupt_ukf import ZuptRun, ZuptUkf
+from pednav_env.nav.zupt_results import ZuptRun
+from pednav_env.nav.zupt_ukf import ZuptUkf
 from pednav_env.reproduce import ReproductionResult, ReproductionRow
 from pednav_env.rotations import wrap_angle
 from pednav_env.sensors.imu import DriftModel, ImuSpec, simulate_imu

@@ -16,7 +16,7 @@ from simulated import FOOT_RATE_HZ, foot_imu
 from pednav_env.envs.foot_filters import family_filter
 from pednav_env.nav.kernel_threads import compact_log, fetch_add, thread_parts
 from pednav_env.nav.zupt_config import ZuptUkfConfig
-from pednav_env.nav.zupt_kernel import new_update_log
+from pednav_env.nav.zupt_kernel_args import new_update_log
 from pednav_env.nav.zupt_ukf import ZuptUkf
 from pednav_env.sensors.imu import ImuSpec
 
