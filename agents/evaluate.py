@@ -58,6 +58,8 @@ from scipy import stats
 from stable_baselines3.common.evaluation import evaluate_policy
 
 import pednav_env  # noqa: F401  (registers the environments)
+from agents.episode_result import EpisodeResult
+from agents.evaluate_report import write_plots
 from agents.policies import BUILTIN_POLICIES, FAMILY_ENVS, ZERO_ACTION, load_policy, split_name
 from baselines import PaperPolicy, TunedFixedPolicy
 from pednav_env.sb3 import NativeVecEnv
@@ -96,25 +98,6 @@ def refuse_privileged(env_id: str, name: str, policy: Any = None) -> None:
             "info['context']); on recordings that context comes from the truth track, so it "
             "cannot be evaluated there"
         )
-
-
-@dataclass(frozen=True)
-class EpisodeResult:
-    """Outcome of one evaluation episode."""
-
-    seed: int
-    mean_error: float  # time-averaged horizontal error (m) = −return
-    final_error: float  # m
-    distance: float  # m walked
-    diverged: bool
-    #: horizontal error (m) at the end of each decision interval
-    error_trace: tuple[float, ...] = ()
-    #: the recording the episode played (replay env), else None
-    trial: str | None = None
-
-    @property
-    def final_error_pct(self) -> float:
-        return 100.0 * self.final_error / self.distance if self.distance > 0 else math.nan
 
 
 @dataclass(frozen=True)
@@ -375,8 +358,6 @@ def evaluate(
     ]
     outcomes = play_plan(plan, backend, on_episode)
     if plot_dir is not None:
-        from agents.evaluate_report import write_plots
-
         write_plots(env_id, outcomes, Path(plot_dir), interval_s)
     return {
         "env": env_id,
@@ -469,8 +450,6 @@ def evaluate_families(
     ]
     outcomes = play_plan(plan, backend, on_episode)
     if plot_dir is not None:
-        from agents.evaluate_report import write_plots
-
         by_name = {
             name if fam == "paper" else f"{name}:{fam}": res
             for (fam, name), res in outcomes.items()

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.evaluate import EpisodeResult
+from agents.episode_result import EpisodeResult
 from agents.policies import ZERO_ACTION
 from baselines.oracle import LABEL as ORACLE_LABEL
 
