@@ -6,15 +6,16 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-NAV = {"checks", "constants", "rotations", "gait", "sensors", "nav"}
+NAV = {"checks", "constants", "draws", "rotations", "gait", "sensors", "nav"}
 ENVS = NAV | {"io", "replay", "envs", "seeds", "pednav_env"}  # pednav_env: the registering __init__
 #: What each unit (a pednav_env subpackage or module, baselines, agents) may import.
 MAY_IMPORT = {
     "checks": set(),
     "constants": set(),
     "rotations": set(),
+    "draws": set(),
     "seeds": set(),
-    "gait": {"checks", "constants", "rotations", "gait"},
+    "gait": {"checks", "constants", "draws", "rotations", "gait"},
     "sensors": NAV - {"nav"},
     "nav": NAV,
     "io": {"checks", "constants", "rotations", "sensors", "io"},

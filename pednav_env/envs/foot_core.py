@@ -22,6 +22,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from pednav_env.draws import choice_cdf, choice_index
 from pednav_env.envs.foot_context import grade_code, interval_context
 from pednav_env.envs.foot_features import (
     masked,
@@ -56,7 +57,7 @@ from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.nav.zupt_config import ZuptUkfConfig
 from pednav_env.nav.zupt_ukf import ZuptUkf
-from pednav_env.sensors.imu import IMU_GRADES, simulate_imu
+from pednav_env.sensors.imu import IMU_GRADES, grade_spec, simulate_imu
 
 Array = NDArray[np.float64]
 
@@ -192,7 +193,9 @@ CALIBRATED_WALKERS = StanceRandomization.calibrated()
 
 def generate_episode(config: FootZuptConfig, rng: np.random.Generator) -> Episode:
     """Draw one episode from ``rng`` (fixed draw order: route, grade, IMU errors;
-    calibrated scenario: walker, route, grade, IMU errors)."""
+    calibrated scenario: walker, route, grade, IMU errors). The random
+    scenario's grade is drawn by :func:`pednav_env.draws.choice_index`, the
+    number ``rng.choice(len(w), p=w / w.sum())`` gives."""
     sim = FootSimConfig(rate_hz=config.rate_hz)
     if config.scenario == "paper":
         route = paper_route()
@@ -205,13 +208,13 @@ def generate_episode(config: FootZuptConfig, rng: np.random.Generator) -> Episod
     else:
         route = random_route(rng, config.route)
         w = np.asarray(config.imu_grade_weights, dtype=float)
-        grade = config.imu_grades[int(rng.choice(len(w), p=w / w.sum()))]
+        grade = config.imu_grades[choice_index(rng, choice_cdf(w / w.sum()))]
     truth = simulate_foot(route, sim, full_state=False)
     imu = simulate_imu(
         truth.omega_b,
         truth.f_b,
         config.rate_hz,
-        IMU_GRADES[grade](),
+        grade_spec(grade),
         [rng],
         gait_step_index=truth.gait_step,
     )

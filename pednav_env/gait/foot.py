@@ -42,6 +42,7 @@ those of the plain formulas.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -68,6 +69,19 @@ Array = NDArray[np.float64]
 
 #: Heel-to-toe-pivot distance used for the toe-off knot (m).
 FOOT_LENGTH_M = 0.18
+#: The values of a StrideShape :func:`build_schedule` tabulates, in its columns' order.
+_SHAPE_VALUES = operator.attrgetter(
+    "stance_s",
+    "heel_off_s",
+    "swing_s",
+    "heel_strike_s",
+    "stride_length_m",
+    "swing_height_m",
+    "mid_swing_pitch",
+    "mid_swing_roll",
+    "toe_off_pitch",
+    "heel_strike_pitch",
+)
 #: 2-point Gauss–Legendre nodes and weights on [−1, 1].
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(2)
 
@@ -187,30 +201,18 @@ def build_schedule(route: Route) -> HeelSchedule:
         )
     realistic_knots = bool(with_toe) and with_toe[0]
     table = np.array(
-        [
-            (
-                st.stop_s,
-                st.heading_change,
-                sh.stance_s,
-                sh.heel_off_s,
-                sh.swing_s,
-                sh.heel_strike_s,
-                sh.stride_length_m,
-                sh.swing_height_m,
-                sh.mid_swing_pitch,
-                sh.mid_swing_roll,
-                sh.toe_off_pitch or 0.0,
-                sh.heel_strike_pitch or 0.0,
-                sh.speed,
-                int(sh.gait),
-            )
-            for st in strides
-            for sh in (st.shape,)
-        ],
-        dtype=float,
-    ).reshape(n_str, 14)
+        [(st.stop_s, st.heading_change, *_SHAPE_VALUES(st.shape)) for st in strides], dtype=float
+    ).reshape(n_str, 12)
+    if realistic_knots:
+        table[:, 10:] += 0.0  # −0 → +0, as ``pitch or 0.0``
+    else:
+        table[:, 10:] = 0.0  # toe-off and heel-strike pitch None: no such knots
+    # speed = length / cycle_s, the cycle summed as StrideShape.cycle_s sums it
+    cycle = ((table[:, 2] + table[:, 3]) + table[:, 4]) + table[:, 5]
+    speed = table[:, 6] / cycle
+    gait = np.array([int(st.shape.gait) for st in strides], dtype=np.int64)
     stop, turn, t0_s, t1_s, t2_s, t3_s, length, height, pitch_mid, roll_mid = table[:, :10].T
-    toe_pitch, strike_pitch, speed, gait = table[:, 10:].T
+    toe_pitch, strike_pitch = table[:, 10:].T
 
     # Times: t ← t + stance, then the knots t₀ + T₁, (t₀ + T₁) + T₂, … in that order.
     stand = np.zeros(n_str)
@@ -312,7 +314,7 @@ def build_schedule(route: Route) -> HeelSchedule:
         *strikes,
         t_start,
         t_end,
-        gait.astype(np.int64),
+        gait,
         kind.astype(np.int8),
     )
 

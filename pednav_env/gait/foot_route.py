@@ -21,6 +21,7 @@ from enum import IntEnum
 
 import numpy as np
 
+from pednav_env.draws import choice_cdf, choice_index
 from pednav_env.gait.stance_motion import StanceMotion
 
 
@@ -141,6 +142,14 @@ class Stride:
             raise ValueError(
                 f"Stride.heading_change must be in [−π, π], got {self.heading_change!r}"
             )
+
+    @classmethod
+    def unchecked(cls, shape: StrideShape, heading_change: float, stop_s: float) -> Stride:
+        """A stride from values inside the validated ranges by construction (the
+        draws of :func:`random_route`), without ``__post_init__``'s checks."""
+        stride = object.__new__(cls)
+        stride.__dict__.update(shape=shape, heading_change=heading_change, stop_s=stop_s)
+        return stride
 
 
 @dataclass(frozen=True)
@@ -277,15 +286,30 @@ RUN_DRAWS = (
 )
 
 
-def _random_stride_shapes(rng: np.random.Generator, gait: Gait, n: int) -> list[StrideShape]:
-    """Draw ``n`` realistic stride shapes for ``gait`` (ranges in RouteRandomization).
+def _bounds(draws: tuple[tuple[float, float], ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Lower bounds and widths high − low of ``rng.uniform`` draws, as it computes them."""
+    table = np.array(draws)
+    return table[:, 0].copy(), table[:, 1] - table[:, 0]
+
+
+_WALK_BOUNDS, _RUN_BOUNDS = _bounds(WALK_DRAWS), _bounds(RUN_DRAWS)
+
+
+def _random_stride_shapes(
+    rng: np.random.Generator, gait: Gait, n: int
+) -> tuple[list[StrideShape], list[float]]:
+    """Draw ``n`` realistic stride shapes for ``gait`` (ranges in RouteRandomization)
+    and their cycles (:attr:`StrideShape.cycle_s`, the same sum).
 
     The same draws, in the same order, as ``n`` calls of
-    :func:`random_stride_shape`, made in one ``rng.uniform`` call.
+    :func:`random_stride_shape`: one ``rng.uniform(low, high, size=(n, k))``,
+    written out as numpy computes it (low + (high − low) · u, u from
+    ``rng.random``, element by element), which gives the same numbers
+    without its argument handling.
     """
-    ranges = np.array(RUN_DRAWS if gait is Gait.RUN else WALK_DRAWS)
-    u = rng.uniform(ranges[:, 0], ranges[:, 1], size=(n, len(ranges))).tolist()
-    shapes = []
+    low, width = _RUN_BOUNDS if gait is Gait.RUN else _WALK_BOUNDS
+    u = (low + width * rng.random((n, low.size))).tolist()
+    shapes, cycles = [], []
     for row in u:
         if gait is Gait.RUN:
             length, cycle, stance_frac, height, toe_off, heel_strike, pitch, roll = row
@@ -317,43 +341,49 @@ def _random_stride_shapes(rng: np.random.Generator, gait: Gait, n: int) -> list[
                 gait=gait,
             )
         )
-    return shapes
+        cycles.append(((t0 + t1) + t2) + t1)  # cycle_s: T₀ + T₁ + T₂ + T₃, T₃ = T₁
+    return shapes, cycles
 
 
 def random_stride_shape(rng: np.random.Generator, gait: Gait) -> StrideShape:
     """Draw a realistic stride shape for ``gait`` (ranges in RouteRandomization)."""
-    return _random_stride_shapes(rng, gait, 1)[0]
+    return _random_stride_shapes(rng, gait, 1)[0][0]
 
 
 def random_route(rng: np.random.Generator, config: RouteRandomization | None = None) -> Route:
     """A random walk: legs of one gait class separated by turns and stops.
 
-    Draws only from ``rng``; the route starts at the origin heading east.
+    Draws only from ``rng``; the route starts at the origin heading east. Per
+    leg, in order: the gait class (``rng.choice(4, p=weights)``), the number
+    of strides, the turn, whether to stop and for how long, the stride
+    shapes; at the end the micro-motion phases. The gait class is drawn by
+    :func:`pednav_env.draws.choice_index`, the same number as ``rng.choice``
+    without its argument handling. The strides are built without their
+    checks: every value is inside the validated ranges by construction.
     """
     cfg = config or RouteRandomization()
     target = rng.uniform(*cfg.duration_s)
     weights = np.asarray(cfg.gait_weights, dtype=float)
-    weights = weights / weights.sum()
+    cdf = choice_cdf(weights / weights.sum())
     gaits = [Gait.SLOW_WALK, Gait.WALK, Gait.FAST_WALK, Gait.RUN]
     initial, final = 2.0, 1.0
     strides: list[Stride] = []
     elapsed = initial + final
     while True:
-        gait = gaits[int(rng.choice(4, p=weights))]
+        gait = gaits[choice_index(rng, cdf)]
         n_leg = int(rng.integers(cfg.leg_strides[0], cfg.leg_strides[1] + 1))
         turn_total = rng.uniform(-math.pi, math.pi)
         n_turn = max(1, math.ceil(abs(turn_total) / cfg.max_turn_per_stride))
         stop = rng.uniform(*cfg.stop_s) if rng.uniform() < cfg.stop_probability else 0.0
-        leg = []
-        for i, shape in enumerate(_random_stride_shapes(rng, gait, n_leg)):
-            turn = turn_total / n_turn if i < n_turn else 0.0
-            leg.append(Stride(shape, heading_change=turn, stop_s=stop if i == 0 else 0.0))
-        for s in leg:
-            if elapsed + s.shape.cycle_s + s.stop_s > target and strides:
+        shapes, cycles = _random_stride_shapes(rng, gait, n_leg)
+        turn = turn_total / n_turn
+        for i, (shape, cycle) in enumerate(zip(shapes, cycles, strict=True)):
+            stop_i = stop if i == 0 else 0.0
+            if elapsed + cycle + stop_i > target and strides:
                 phases = tuple(rng.uniform(0, 2 * math.pi, 3))
                 return Route(tuple(strides), initial, final, realistic=True, seed_phases=phases)
-            strides.append(s)
-            elapsed += s.shape.cycle_s + s.stop_s
+            strides.append(Stride.unchecked(shape, turn if i < n_turn else 0.0, stop_i))
+            elapsed += cycle + stop_i
 
 
 def paper_stride_shape(stride_length_m: float) -> StrideShape:

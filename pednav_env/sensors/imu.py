@@ -17,6 +17,7 @@ saturation (the paper's gyro saturated at 6 rad/s).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
@@ -247,6 +248,15 @@ IMU_GRADES = {
     "microstrain_gx5": ImuSpec.microstrain_gx5,
     "ideal": ImuSpec.ideal,
 }
+
+
+@functools.cache
+def grade_spec(grade: str) -> ImuSpec:
+    """The spec of the named grade of :data:`IMU_GRADES`, built once (specs are
+    frozen, so one instance serves every episode)."""
+    if grade not in IMU_GRADES:
+        raise ValueError(f"grade: unknown IMU grade {grade!r}; known: {sorted(IMU_GRADES)}")
+    return IMU_GRADES[grade]()
 
 
 @dataclass(frozen=True)

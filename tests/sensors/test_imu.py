@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pednav_env.constants import STANDARD_GRAVITY
-from pednav_env.sensors.imu import DriftModel, ImuSpec, simulate_imu
+from pednav_env.sensors.imu import IMU_GRADES, DriftModel, ImuSpec, grade_spec, simulate_imu
 
 G = STANDARD_GRAVITY
 
@@ -141,3 +141,11 @@ def test_bad_inputs_raise():
         simulate_imu(np.zeros((2, 10, 3)), np.zeros((2, 10, 3)), 100.0, ImuSpec(), gens(3))
     with pytest.raises(ValueError, match="rate_hz"):
         ImuSpec.paper003(rate_hz=-1.0)
+
+
+def test_grade_spec_is_the_named_grade_built_once():
+    for name, make in IMU_GRADES.items():
+        assert grade_spec(name) == make()
+        assert grade_spec(name) is grade_spec(name)
+    with pytest.raises(ValueError, match="grade"):
+        grade_spec("no_such_grade")
