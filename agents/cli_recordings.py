@@ -77,13 +77,20 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 def _cmd_sim2real(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from pednav_env.calibration.compare import MODELS, compare
+    from pednav_env.calibration.compare import MODELS, compare, model_from_json
     from pednav_env.calibration.sources import distinct_walks, load_walk
     from pednav_env.calibration.stats import walk_stats
     from pednav_env.io import find_recordings
 
-    if args.model not in MODELS:
-        raise ValueError(f"--model {args.model!r}: use one of {', '.join(MODELS)}")
+    if args.model in MODELS:
+        model = MODELS[args.model]
+    elif args.model.endswith(".json") or Path(args.model).exists():
+        model = model_from_json(args.model)
+    else:
+        raise ValueError(
+            f"--model {args.model!r}: use one of {', '.join(MODELS)} or a fitted-parameter "
+            ".json file"
+        )
     if args.walks < 2:
         raise ValueError(f"--walks must be ≥ 2 (each band's spread), got {args.walks}")
     if args.plot is not None and Path(args.plot).exists() and not Path(args.plot).is_dir():
@@ -101,7 +108,7 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     real = [walk_stats(w) for w in walks]
-    report = compare(real, MODELS[args.model], args.walks, args.seed)
+    report = compare(real, model, args.walks, args.seed)
     if args.plot is not None:
         from pednav_env.calibration.plots import write_figures
 
@@ -117,7 +124,10 @@ def _add_sim2real(sub: argparse._SubParsersAction) -> None:
     )
     s2r.add_argument("recordings", nargs="+", help=".mat/.csv recordings or directories of them")
     s2r.add_argument(
-        "--model", default="calibrated", help="calibrated or today (default calibrated)"
+        "--model",
+        default="calibrated",
+        help="calibrated, today, or a fitted-parameter JSON file "
+        "(e.g. benchmarks/results/calibrate_foot_v3.json; default calibrated)",
     )
     s2r.add_argument(
         "--walks",

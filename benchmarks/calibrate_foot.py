@@ -27,6 +27,11 @@ The four parts are independent; run them in one process or split over several
 
 About 4–6 min of CPU per part with the defaults (1000 evaluations of 8 walks of
 20–30 s in each band holding recordings), and 1 min for its checks.
+
+``--swing-speed-exponent`` fits a 16th value, the swing vigour's speed exponent
+(:data:`pednav_env.calibration.fit.SWING_SPEED`), from 0 (today's behaviour; a
+15-value warm start is extended by it): the candidate of docs/SIM_TO_REAL.md
+("Slow walkers"), stored as ``benchmarks/results/calibrate_foot_v3.json``.
 """
 
 from __future__ import annotations
@@ -43,6 +48,8 @@ from pednav_env.calibration.compare import DEFAULT_WALKS_PER_BAND, SimModel, com
 from pednav_env.calibration.fit import (
     GRADE,
     NAMES,
+    START,
+    SWING_SPEED,
     band_distance,
     by_band,
     fit,
@@ -105,9 +112,11 @@ def run_part(part: str, stats: list[WalkStats], args: argparse.Namespace) -> dic
     train = stats if part == "all" else [s for g, v in folds.items() if g != part for s in v]
     log = lambda gen, best: print(f"  [{part}] generation {gen}: best {best:.4f}", flush=True)  # noqa: E731
     t0 = time.perf_counter()
-    x0 = None
+    x0 = START
     if args.warm_start:
         x0 = json.loads(Path(args.warm_start).read_text())["parts"][part]["fit"]["x"]
+    if args.swing_speed_exponent and len(x0) == len(NAMES):
+        x0 = [*x0, SWING_SPEED.start]
     result = fit(
         train, args.walks, args.max_evaluations, args.seed, args.popsize, log, x0, args.sigma0
     )
@@ -159,6 +168,11 @@ def main() -> None:
         help="start each part from the same part's parameters in this earlier output "
         "(a fold's start then never saw its held-out group)",
     )
+    ap.add_argument(
+        "--swing-speed-exponent",
+        action="store_true",
+        help="also fit the swing vigour's speed exponent (a 16th value, from 0)",
+    )
     ap.add_argument("--merge", nargs="+", metavar="JSON", help="join the outputs of parts")
     ap.add_argument(
         "--recheck",
@@ -167,12 +181,13 @@ def main() -> None:
     )
     ap.add_argument("--out", default=None, help="write the results as JSON here")
     args = ap.parse_args()
-    result: dict = {"names": list(NAMES), "parts": {}}
+    names = [*NAMES, SWING_SPEED.name] if args.swing_speed_exponent else list(NAMES)
+    result: dict = {"names": names, "parts": {}}
     if args.merge:
         for path in args.merge:
             part = json.loads(Path(path).read_text())
             result["parts"].update(part["parts"])
-            result.update({k: v for k, v in part.items() if k not in ("parts", "names")})
+            result.update({k: v for k, v in part.items() if k != "parts"})
         if args.recheck:
             stats = load_stats(args)
             folds = groups(stats)
@@ -192,6 +207,7 @@ def main() -> None:
             "max_evaluations": args.max_evaluations,
             "popsize": args.popsize,
             "seed": args.seed,
+            "swing_speed_exponent": args.swing_speed_exponent,
         }
         for part in args.parts:
             result["parts"][part] = run_part(part, stats, args)

@@ -18,9 +18,11 @@ randomisation), and
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -350,3 +352,56 @@ MODELS = {
     "today": SimModel("today", "adis16470"),
     "calibrated": SimModel("calibrated", "microstrain_gx5", StanceRandomization.calibrated()),
 }
+#: Keys a fitted-parameter file may hold beside the StanceRandomization fields.
+_MODEL_FILE_KEYS = ("imu_grade",)
+
+
+def model_from_json(path: str | Path) -> SimModel:
+    """A simulator model from a fitted-parameter JSON file (``pednav sim2real
+    --model PATH``): an object of :class:`StanceRandomization` fields (numbers;
+    ``flat_fraction`` may be null), optionally ``imu_grade`` (default the
+    recordings' ``microstrain_gx5``), or a ``benchmarks/calibrate_foot.py`` output,
+    whose top-level ``randomization`` is that object. Fields left out take
+    StanceRandomization's defaults. The model is named after the file's stem.
+
+    Raises
+    ------
+    ValueError
+        A missing or unreadable file, invalid JSON, an unknown key, a value that is
+        not a number, or a value StanceRandomization rejects; the message names
+        the file and the key.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except OSError as e:
+        raise ValueError(f"{path}: cannot read the model file ({e.strerror})") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise ValueError(f"{path}: not a JSON file ({e})") from None
+    if isinstance(data, dict) and isinstance(data.get("randomization"), dict):
+        data = {**data["randomization"], **{k: data[k] for k in _MODEL_FILE_KEYS if k in data}}
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a JSON object of model parameters")
+    known = {f.name for f in fields(StanceRandomization)}
+    values: dict[str, float | None] = {}
+    for key, value in data.items():
+        if key in _MODEL_FILE_KEYS:
+            continue
+        if key not in known:
+            raise ValueError(f"{path}: unknown key {key!r}; known: {', '.join(sorted(known))}")
+        if value is None and key == "flat_fraction":
+            values[key] = None
+        elif isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueError(f"{path}: key {key!r} must be a number, got {value!r}")
+        else:
+            values[key] = float(value)
+    grade = data.get("imu_grade", "microstrain_gx5")
+    if grade not in IMU_GRADES:
+        raise ValueError(
+            f"{path}: key 'imu_grade' {grade!r} unknown; known: {', '.join(sorted(IMU_GRADES))}"
+        )
+    try:
+        stance = StanceRandomization(**values)
+    except ValueError as e:
+        raise ValueError(f"{path}: {e}") from None
+    return SimModel(path.stem, grade, stance)

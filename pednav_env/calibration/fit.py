@@ -8,7 +8,10 @@ exponent), the edge amplitude (the same), the heel-strike and heel-off time
 constants, the roll-over amplitude, the walker's foot-flat share of the
 walking cycle (mean at 1 m/s, spread over walkers, change per unit ln speed),
 the heel-off/heel-strike share, and the swing vigour (log10 mean and spread of
-the scale of the swing's pitch knots). The IMU grade is the recordings'
+the scale of the swing's pitch knots). Optionally (:data:`SWING_SPEED`, a
+16th value) the swing vigour's speed exponent,
+:attr:`pednav_env.gait.stance_motion.StanceRandomization.swing_speed_exponent`,
+which the shipped fit holds at 0. The IMU grade is the recordings'
 (``microstrain_gx5``).
 
 The distance (:func:`band_distance`), per speed band holding recordings,
@@ -133,13 +136,37 @@ NAMES = tuple(p.name for p in PARAMETERS)
 START = np.array([p.start for p in PARAMETERS])
 LOWER = np.array([p.lower for p in PARAMETERS])
 UPPER = np.array([p.upper for p in PARAMETERS])
+#: The optional 16th value: the swing vigour's speed exponent (k ∝ v^p), start 0
+#: (the shipped model's speed-independent scale).
+SWING_SPEED = Parameter("swing_speed_exponent", 0.0, -0.5, 1.5)
+EXTENDED = (*PARAMETERS, SWING_SPEED)
+
+
+def parameter_set(size: int) -> tuple[Parameter, ...]:
+    """The parameters of a vector of ``size`` values: :data:`PARAMETERS` (15) or
+    :data:`EXTENDED` (16)."""
+    if size == len(PARAMETERS):
+        return PARAMETERS
+    if size == len(EXTENDED):
+        return EXTENDED
+    raise ValueError(
+        f"a parameter vector has {len(PARAMETERS)} or {len(EXTENDED)} values, got {size}"
+    )
+
+
+def box(size: int) -> tuple[Array, Array]:
+    """Lower and upper bounds of a vector of ``size`` values (:func:`parameter_set`)."""
+    ps = parameter_set(size)
+    return np.array([p.lower for p in ps]), np.array([p.upper for p in ps])
 
 
 def randomization(x: Sequence[float]) -> StanceRandomization:
-    """The parameter vector (:data:`NAMES` order, clipped to the box) as a
-    StanceRandomization."""
-    x = np.clip(np.asarray(x, dtype=float), LOWER, UPPER)
-    v = dict(zip(NAMES, x.tolist(), strict=True))
+    """The parameter vector (:data:`NAMES` order, then optionally
+    :data:`SWING_SPEED`; clipped to the box) as a StanceRandomization."""
+    x = np.asarray(x, dtype=float)
+    lower, upper = box(x.size)
+    x = np.clip(x, lower, upper)
+    v = dict(zip([p.name for p in parameter_set(x.size)], x.tolist(), strict=True))
     return StanceRandomization(
         quiet_log10_mean=v["quiet_log10_mean"],
         quiet_log10_std=v["quiet_log10_std"],
@@ -156,6 +183,7 @@ def randomization(x: Sequence[float]) -> StanceRandomization:
         heel_fraction=v["heel_fraction"],
         swing_pitch_scale=10 ** v["log10_swing_pitch_scale"],
         swing_pitch_log10_std=v["swing_pitch_log10_std"],
+        swing_speed_exponent=v.get("swing_speed_exponent", 0.0),
     )
 
 
@@ -297,15 +325,18 @@ def fit(
     sigma0: float = 0.2,
 ) -> FitResult:
     """CMA-ES (Hansen's ``cma``) in the box scaled to [0, 1]^n from ``x0``
-    (default :data:`START`; clipped to the box), step ``sigma0`` in the scaled
-    box, until ``max_evaluations`` or its own convergence tests (a
-    best-distance change below 1e-3 over the recent generations)."""
+    (default :data:`START`; clipped to the box; 16 values fit
+    :data:`EXTENDED`), step ``sigma0`` in the scaled box, until
+    ``max_evaluations`` or its own convergence tests (a best-distance change
+    below 1e-3 over the recent generations)."""
     if not real:
         raise ValueError("fit: no recordings with a walking speed in a band")
-    scale = UPPER - LOWER
-    start = START if x0 is None else np.clip(np.asarray(x0, dtype=float), LOWER, UPPER)
+    x0 = START if x0 is None else np.asarray(x0, dtype=float)
+    lower, upper = box(x0.size)
+    scale = upper - lower
+    start = np.clip(x0, lower, upper)
     es = cma.CMAEvolutionStrategy(
-        (start - LOWER) / scale,
+        (start - lower) / scale,
         sigma0,
         {
             "bounds": [0.0, 1.0],
@@ -321,11 +352,11 @@ def fit(
     history: list[float] = []
     while not es.stop():
         zs = es.ask()
-        es.tell(zs, [distance(LOWER + scale * np.asarray(z), real, walks, seed) for z in zs])
+        es.tell(zs, [distance(lower + scale * np.asarray(z), real, walks, seed) for z in zs])
         history.append(float(es.result.fbest))
         if progress is not None:
             progress(len(history), history[-1])
-    x = LOWER + scale * np.asarray(es.result.xbest)
+    x = lower + scale * np.asarray(es.result.xbest)
     return FitResult(
         x,
         float(es.result.fbest),

@@ -98,7 +98,8 @@ def speed_stride_shape(
     A ``walker`` with a ``flat_fraction`` sets the shares of a walking cycle
     (:meth:`StanceMotion.cycle_fractions`; the drawn stance share less its mid-range
     0.34 is the stride's jitter) and scales the swing's pitch knots by its
-    ``swing_pitch_scale`` (at most :data:`MAX_SWING_PITCH_RAD`). The draws from
+    swing scale k(v) (:meth:`StanceMotion.swing_scale`; at most
+    :data:`MAX_SWING_PITCH_RAD`). The draws from
     ``rng`` are the same with or without a walker."""
     if gait is Gait.RUN:
         cycle, stance_frac, height, toe_off, heel_strike, pitch, roll = rng.uniform(
@@ -117,8 +118,9 @@ def speed_stride_shape(
             t0, t1, t2, t3 = flat * cycle, heel * cycle, swing * cycle, heel * cycle
         height = 0.06 + 0.04 * speed + d_height
         toe_off, heel_strike = 0.4 + 0.3 * speed + d_toe_off, -(0.2 + 0.1 * speed)
-    if walker is not None and walker.swing_pitch_scale != 1.0:
-        k, top = walker.swing_pitch_scale, MAX_SWING_PITCH_RAD
+    k = 1.0 if walker is None else walker.swing_scale(speed)
+    if k != 1.0:
+        top = MAX_SWING_PITCH_RAD
         toe_off, heel_strike = min(k * toe_off, top), max(k * heel_strike, -top)
         pitch = min(max(k * pitch, -top), top)
     return StrideShape.unchecked(

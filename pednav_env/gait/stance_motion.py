@@ -28,8 +28,10 @@ A walker also has a gait timing and a swing vigour, used by
 (:meth:`StanceMotion.cycle_fractions`): the walking cycle is split into foot
 flat f = f₁ + β ln v (plus the stride's jitter), heel-off and heel strike h
 each, and swing 1 − f − 2h; the swing's pitch knots are scaled by
-``swing_pitch_scale``. Without ``flat_fraction`` the route keeps its own
-timing (paper 003's symmetric T₀ = T₂, T₁ = T₃).
+k(v) = ``swing_pitch_scale`` · v^``swing_speed_exponent``
+(:meth:`StanceMotion.swing_scale`; exponent 0, a speed-independent scale,
+unless set). Without ``flat_fraction`` the route keeps its own timing
+(paper 003's symmetric T₀ = T₂, T₁ = T₃).
 
 These functions are compiled into :mod:`pednav_env.gait.foot_kernels`, whose
 numba cache checks that module's file only: after editing this one, delete
@@ -75,6 +77,7 @@ class StanceMotion:
     flat_speed_slope: float = 0.0
     heel_fraction: float = 0.16
     swing_pitch_scale: float = 1.0
+    swing_speed_exponent: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("quiet_rad", "edge_rad", "roll_rad", "stance_spread_log10"):
@@ -114,6 +117,21 @@ class StanceMotion:
                 f"StanceMotion.swing_pitch_scale must be in [0.25, 4], "
                 f"got {self.swing_pitch_scale!r}"
             )
+        if not (math.isfinite(self.swing_speed_exponent) and -2 <= self.swing_speed_exponent <= 2):
+            raise ValueError(
+                f"StanceMotion.swing_speed_exponent must be in [−2, 2], "
+                f"got {self.swing_speed_exponent!r}"
+            )
+
+    def swing_scale(self, speed_mps: float) -> float:
+        """The factor k(v) = ``swing_pitch_scale`` · v^``swing_speed_exponent`` on the
+        swing's pitch knots of a stride at ``speed_mps`` (m/s): the swing's vigour
+        grows with speed faster (exponent > 0) than the route's knots (toe-off
+        0.4 + 0.3 v) alone. Exponent 0 (the default) returns ``swing_pitch_scale``
+        itself, for every speed."""
+        if self.swing_speed_exponent == 0.0:
+            return self.swing_pitch_scale
+        return self.swing_pitch_scale * max(speed_mps, 1e-3) ** self.swing_speed_exponent
 
     def cycle_fractions(self, speed_mps: float, jitter: float = 0.0) -> tuple[float, float, float]:
         """Shares of a walking cycle at ``speed_mps`` (m/s): (foot flat, each of heel-off
@@ -192,6 +210,9 @@ class StanceRandomization:
 
     The defaults are today's guess; :meth:`calibrated` holds the values fitted
     to recorded walks (docs/SIM_TO_REAL.md, ``benchmarks/calibrate_foot.py``).
+    ``swing_speed_exponent`` (every walker's, :meth:`StanceMotion.swing_scale`)
+    needs ``flat_fraction`` (the walker's gait timing); 0 keeps the swing scale
+    independent of speed, as in :meth:`calibrated`.
     """
 
     quiet_log10_mean: float = -3.0
@@ -212,6 +233,7 @@ class StanceRandomization:
     heel_fraction: float = 0.16
     swing_pitch_scale: float = 1.0
     swing_pitch_log10_std: float = 0.0
+    swing_speed_exponent: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("quiet_log10_std", "edge_log10_std", "swing_pitch_log10_std"):
@@ -227,6 +249,11 @@ class StanceRandomization:
             v = getattr(self, name)
             if not (math.isfinite(v) and -7 <= v <= -0.5):
                 raise ValueError(f"StanceRandomization.{name} must be in [−7, −0.5], got {v!r}")
+        if self.swing_speed_exponent != 0.0 and self.flat_fraction is None:
+            raise ValueError(
+                "StanceRandomization.swing_speed_exponent needs flat_fraction "
+                "(the walker's gait timing), got flat_fraction=None"
+            )
         # the remaining values are checked by StanceMotion at each draw
         self.draw(np.random.default_rng(0))
 
@@ -291,4 +318,5 @@ class StanceRandomization:
             "flat_speed_slope": self.flat_speed_slope,
             "heel_fraction": self.heel_fraction,
             "swing_pitch_scale": float(min(max(scale, 0.25), 4.0)),
+            "swing_speed_exponent": self.swing_speed_exponent,
         }

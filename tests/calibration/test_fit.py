@@ -3,6 +3,8 @@ walks as recordings for the real-data runner (agents.choose_shoe)."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy.stats import wasserstein_distance
@@ -14,10 +16,12 @@ from pednav_env.calibration.fit import (
     MISSING_BIN_DECADES,
     NAMES,
     START,
+    SWING_SPEED,
     band_distance,
     coverage_distance,
     distance,
     groups,
+    parameter_set,
     pooled_w1,
     randomization,
     stride_distance,
@@ -124,3 +128,16 @@ def test_simulated_walk_as_recording_runs_through_the_real_data_filter() -> None
     # gives metres
     armse = errors_by_recording(real_fixed_setup(), recs)[rec.name]
     assert armse < 0.5
+
+
+def test_randomization_takes_the_optional_swing_speed_exponent() -> None:
+    shipped = randomization(START)
+    assert shipped.swing_speed_exponent == 0.0
+    extended = randomization([*START, 0.4])
+    assert extended.swing_speed_exponent == pytest.approx(0.4)
+    assert replace(extended, swing_speed_exponent=0.0) == shipped
+    # clipped to its box [−0.5, 1.5] like the other values
+    assert randomization([*START, 9.0]).swing_speed_exponent == pytest.approx(SWING_SPEED.upper)
+    assert parameter_set(len(NAMES) + 1)[-1] is SWING_SPEED
+    with pytest.raises(ValueError, match="15 or 16 values, got 14"):
+        randomization(START[:-1])

@@ -4,6 +4,7 @@ stance dynamics are tested in tests/gait/test_stance_motion.py."""
 from __future__ import annotations
 
 import json
+from dataclasses import asdict
 from pathlib import Path
 
 import pytest
@@ -16,9 +17,11 @@ from pednav_env.calibration.compare import (
     Sim2RealReport,
     band_of,
     compare,
+    model_from_json,
 )
 from pednav_env.calibration.sources import load_walk
 from pednav_env.calibration.stats import walk_stats
+from pednav_env.gait.stance_motion import StanceRandomization
 
 DATA = Path(__file__).resolve().parents[3] / "shared" / "data"
 
@@ -99,3 +102,57 @@ def test_cli_sim2real_plot(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     assert (tmp_path / "sim2real_calibrated_strides.png").exists()
     out = capsys.readouterr().out
     assert "covered" in out and "per stride, by stride speed" in out
+
+
+def test_model_from_json_reads_a_fit_output_and_a_plain_object(tmp_path: Path) -> None:
+    shipped = StanceRandomization.calibrated()
+    fit_output = tmp_path / "fit_output.json"
+    fit_output.write_text(json.dumps({"names": [], "randomization": asdict(shipped)}))
+    model = model_from_json(fit_output)
+    assert model.name == "fit_output" and model.imu_grade == "microstrain_gx5"
+    assert model.stance == shipped
+    plain = tmp_path / "mine.json"
+    plain.write_text(
+        json.dumps({"flat_fraction": 0.3, "swing_speed_exponent": 0.4, "imu_grade": "adis16470"})
+    )
+    model = model_from_json(plain)
+    assert model.imu_grade == "adis16470"
+    # the given keys, and StanceRandomization's defaults for the others
+    assert model.stance == StanceRandomization(flat_fraction=0.3, swing_speed_exponent=0.4)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("{not json", "not a JSON file"),
+        ("[1, 2]", "expected a JSON object"),
+        ('{"quiet_mean": -2.0}', "unknown key 'quiet_mean'"),
+        ('{"tau_hs_s": "0.1"}', "key 'tau_hs_s' must be a number"),
+        ('{"tau_hs_s": true}', "key 'tau_hs_s' must be a number"),
+        ('{"quiet_log10_std": 5.0}', "quiet_log10_std must be in [0, 2]"),
+        ('{"imu_grade": "phone"}', "key 'imu_grade' 'phone' unknown"),
+        ('{"randomization": {"edge_log10_mean": null}}', "key 'edge_log10_mean'"),
+    ],
+)
+def test_model_from_json_rejects_malformed_files(tmp_path: Path, text: str, message: str) -> None:
+    path = tmp_path / "model.json"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=r"model\.json") as info:
+        model_from_json(path)
+    assert message in str(info.value)
+    with pytest.raises(ValueError, match="cannot read"):
+        model_from_json(tmp_path / "missing.json")
+
+
+def test_cli_sim2real_model_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    good = tmp_path / "candidate.json"
+    good.write_text(json.dumps(asdict(StanceRandomization.calibrated())))
+    assert (
+        main(["sim2real", str(PYSHOE_SAMPLE), "--walks", "3", "--json", "--model", str(good)]) == 0
+    )
+    assert json.loads(capsys.readouterr().out)["model"] == "candidate"
+    bad = tmp_path / "broken.json"
+    bad.write_text('{"heel_fraction": "wide"}')
+    assert main(["sim2real", str(PYSHOE_SAMPLE), "--model", str(bad)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "broken.json" in err and "'heel_fraction'" in err and "\n" not in err

@@ -121,3 +121,58 @@ def test_stance_randomization_rejects_bad_values() -> None:
         StanceRandomization(quiet_log10_std=-0.1)
     with pytest.raises(ValueError, match="roll_fraction"):
         StanceMotion(roll_fraction=0.0)
+
+
+def test_swing_scale_hand_computed() -> None:
+    # k(v) = 1.2 · v^0.5: 1.2 · 0.5 = 0.6 at 0.25 m/s, 1.2 · 2 = 2.4 at 4 m/s
+    walker = StanceMotion(flat_fraction=0.3, swing_pitch_scale=1.2, swing_speed_exponent=0.5)
+    assert walker.swing_scale(0.25) == pytest.approx(0.6)
+    assert walker.swing_scale(4.0) == pytest.approx(2.4)
+    assert walker.swing_scale(1.0) == pytest.approx(1.2)
+    # exponent 0 (the default): the scale itself at every speed, exactly
+    plain = StanceMotion(flat_fraction=0.3, swing_pitch_scale=1.2)
+    assert [plain.swing_scale(v) for v in (0.3, 1.0, 3.0)] == [1.2, 1.2, 1.2]
+
+
+def test_swing_speed_exponent_scales_the_knots_by_the_stride_speed() -> None:
+    base = SpeedRouteConfig(speed_mps=(0.3, 1.9), duration_s=(25.0, 30.0))
+    flat = StanceMotion(flat_fraction=0.3, swing_pitch_scale=1.1)
+    steep = replace(flat, swing_speed_exponent=0.6)
+    a = speed_route(np.random.default_rng(6), replace(base, stance_motion=flat))
+    b = speed_route(np.random.default_rng(6), replace(base, stance_motion=steep))
+    plain = speed_route(np.random.default_rng(6), base)
+    assert len(a.strides) == len(b.strides) == len(plain.strides) > 10
+    slow = fast = 0
+    for sa, sb, sp in zip(a.strides, b.strides, plain.strides, strict=True):
+        ha, hb, hp = sa.shape, sb.shape, sp.shape
+        # the same draws: cycle and timing unchanged, only the pitch knots differ
+        assert hb.cycle_s == ha.cycle_s and hb.stance_s == ha.stance_s
+        k = 1.1 * hb.speed**0.6
+        assert hb.toe_off_pitch == pytest.approx(min(k * hp.toe_off_pitch, 1.35))
+        assert hb.heel_strike_pitch == pytest.approx(max(k * hp.heel_strike_pitch, -1.35))
+        assert ha.toe_off_pitch == pytest.approx(min(1.1 * hp.toe_off_pitch, 1.35))
+        # gentler than the speed-independent scale below 1 m/s, more vigorous above
+        gentler = abs(hb.heel_strike_pitch) < abs(ha.heel_strike_pitch)
+        assert gentler == (hb.speed < 1.0)
+        slow += hb.speed < 1.0
+        fast += hb.speed > 1.0
+    assert slow > 0 and fast > 0
+
+
+def test_swing_speed_exponent_is_drawn_for_every_walker_without_changing_the_draws() -> None:
+    shipped = StanceRandomization.calibrated()
+    assert shipped.swing_speed_exponent == 0.0
+    steep = replace(shipped, swing_speed_exponent=0.5)
+    a = shipped.draw(np.random.default_rng(11))
+    b = steep.draw(np.random.default_rng(11))
+    assert a.swing_speed_exponent == 0.0 and b.swing_speed_exponent == 0.5
+    assert replace(b, swing_speed_exponent=0.0) == a
+
+
+def test_swing_speed_exponent_rejects_bad_values() -> None:
+    with pytest.raises(ValueError, match="swing_speed_exponent"):
+        StanceMotion(swing_speed_exponent=2.5)
+    with pytest.raises(ValueError, match="swing_speed_exponent"):
+        StanceMotion(swing_speed_exponent=float("nan"))
+    with pytest.raises(ValueError, match="swing_speed_exponent needs flat_fraction"):
+        StanceRandomization(swing_speed_exponent=0.3)
