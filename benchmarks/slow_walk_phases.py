@@ -24,7 +24,9 @@ samples below it; this script splits that share by phase:
   at most 3 s), their median length, and per tenth of the cycle (0 = stance
   start) the median log10 SHOE and the share of samples below L;
 - the swing's vigour by walking speed (:func:`speed_scan`): every recording's p90
-  and swing |ω| beside the all-data fit's simulated walks at 0.35–1.5 m/s.
+  and swing |ω| beside the all-data fit's simulated walks at 0.35–1.5 m/s;
+- an exploration (:func:`explore`): the all-data fit with one value changed, at
+  0.30–0.45 m/s.
 
 Recordings: the three slowest PyShoe trials, beside the all-data fit of
 ``--fits`` (default ``benchmarks/results/calibrate_foot.json``, the shipped
@@ -41,7 +43,7 @@ from __future__ import annotations
 import argparse
 import json
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -79,6 +81,8 @@ MAX_CYCLE_S = 3.0
 NOMINAL_SPAN = (0.7, 1.1)
 #: Walking speeds (m/s) of the swing-vigour scan (:func:`speed_scan`).
 SCAN_SPEEDS = (0.35, 0.45, 0.6, 0.75, 0.9, 1.1, 1.3, 1.5)
+#: The level L of :func:`explore` (between the slowest trials' p50s, 7.81–7.93).
+EXPLORE_LEVEL = 7.88
 #: Bins of the cycle profile (stance start = 0).
 PROFILE_BINS = 10
 
@@ -233,6 +237,7 @@ def main() -> None:
     ap.add_argument("--walks", type=int, default=60)
     ap.add_argument("--seed", type=int, default=21200)
     ap.add_argument("--scan-walks", type=int, default=24, help="simulated walks per scan speed")
+    ap.add_argument("--explore-walks", type=int, default=40, help="walks per explored variant")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     shared = Path(args.shared)
@@ -283,8 +288,47 @@ def main() -> None:
             }
         )
     scan = speed_scan(rows, fits, args.scan_walks, args.seed + len(cases))
+    explored = explore(fits, args.explore_walks, args.seed + 100)
     if args.json:
-        Path(args.json).write_text(json.dumps({"cases": out, "speed_scan": scan}, indent=1))
+        Path(args.json).write_text(
+            json.dumps({"cases": out, "speed_scan": scan, "exploration": explored}, indent=1)
+        )
+
+
+def explore(fits: dict, walks: int, seed: int) -> dict:
+    """One value of the all-data fit changed at a time, walks at 0.30–0.45 m/s (an
+    exploration of the mechanism, not a fit; :data:`EXPLORE_LEVEL` the level L):
+    the swing scale k × 0.6 and × 0.4, and a heel-off/heel-strike share of 0.10
+    with the time given to the flat phase or to the swing."""
+    base = StanceRandomization(**fits["parts"]["all"]["randomization"])
+    variants = {
+        "all-data fit": base,
+        "k x 0.6": replace(base, swing_pitch_scale=base.swing_pitch_scale * 0.6),
+        "k x 0.4": replace(base, swing_pitch_scale=base.swing_pitch_scale * 0.4),
+        "heel 0.10, flat longer": replace(
+            base,
+            heel_fraction=0.10,
+            flat_fraction=base.flat_fraction + 2 * (base.heel_fraction - 0.10),
+        ),
+        "heel 0.10, swing longer": replace(base, heel_fraction=0.10),
+    }
+    print(f"exploration at 0.30-0.45 m/s, {walks} walks, L = {EXPLORE_LEVEL}")
+    out = {}
+    for name, stance in variants.items():
+        truth, imu = SimModel(name, GRADE, stance).batch((0.30, 0.45), walks, seed)
+        rows = [
+            walk_row(samples_from_simulation(truth, imu, i), EXPLORE_LEVEL) for i in range(walks)
+        ]
+        r = summarize(rows)
+        p50 = np.array([x["p50"] for x in rows])
+        lo, hi = np.percentile(p50, (5, 95))
+        print(
+            f"  {name:<24} p50 {r['p50']:.2f} (5-95 % {lo:.2f}-{hi:.2f})  p90 {r['p90']:.2f}  "
+            f"swing |w| {r['swing_gyro']:.2f}  first tenth {r['profile0']:.2f}  "
+            f"quiet {r['quiet_share']:.2f}"
+        )
+        out[name] = {**r, "p50_5": float(lo), "p50_95": float(hi)}
+    return out
 
 
 def speed_scan(rows: dict[str, dict[str, float]], fits: dict, walks: int, seed: int) -> dict:
