@@ -9,20 +9,20 @@ temporary directory named after the commit, renames the package there to
 ``pednav_env_ab_old`` (its imports with it) and imports it beside this tree's
 ``pednav_env``. Everything the two packages compute is then measured on the
 same inputs, alternately, the order swapped every round, and the CPU time
-(``process_time``) of every part is kept, so that load that drifts hits both
-alike; the outputs of the two are compared bit for bit.
+(``process_time``) and the wall time of every part are kept, so that load that
+drifts hits both alike; the outputs of the two are compared bit for bit.
 
 - ``walks``: episode generation of the FootZupt env's random scenario (the
   bench's: route, IMU grade, walk, IMU errors; ``generate_episode``), ROUNDS
   rounds (default 10) of WALKS walks (default 40) from the seeds 21 200 + i,
-  the same walks in every round. Prints the CPU per walk of each, the ratio
-  of the totals and the median and quartiles of the per-round ratios, and
-  whether every array of every episode was equal.
+  the same walks in every round. Prints the CPU and wall time per walk of
+  each, the ratio of the totals and the median and quartiles of the per-round
+  ratios, and whether every array of every episode was equal.
 - ``steps``: two native vector envs of N = 256 lanes (``scenario="random"``,
   reset with seed 0, one warm-up step, action 0, autoresets included), one
   from each package, stepped CHUNK vector steps (default 10) at a time for
   ROUNDS rounds (default 30), per filter family (default both). Prints the
-  CPU per vector step, the ratios as above and whether observations,
+  CPU and wall time per vector step, the ratios as above and whether observations,
   rewards, flags and every info entry were equal at the end of every round.
 
 ``NUMBA_NUM_THREADS=1`` keeps the kernel's threads out of the CPU time.
@@ -94,23 +94,27 @@ def paired(label: str, runs: dict[str, Callable[[], Any]], rounds: int, per_roun
     """Run ``runs["old"]`` and ``runs["new"]`` alternately; print CPU per unit and ratios.
     Returns whether their results were equal in every round."""
     cpu: dict[str, list[float]] = {"old": [], "new": []}
+    wall: dict[str, list[float]] = {"old": [], "new": []}
     equal = True
     for r in range(rounds):
         results = {}
         for name in ("old", "new") if r % 2 == 0 else ("new", "old"):
-            t0 = time.process_time()
+            t0, w0 = time.process_time(), time.perf_counter()
             results[name] = runs[name]()
             cpu[name].append(time.process_time() - t0)
+            wall[name].append(time.perf_counter() - w0)
         equal = equal and same(results["old"], results["new"])
-    ratios = sorted(b / a for a, b in zip(cpu["old"], cpu["new"], strict=True))
-    q = statistics.quantiles(ratios, n=4)
-    old_ms, new_ms = (sum(cpu[k]) / (rounds * per_round) * 1e3 for k in ("old", "new"))
-    print(
-        f"{label}: {rounds} rounds × {per_round}; CPU old {old_ms:.3f} ms, new {new_ms:.3f} ms; "
-        f"ratio of totals {new_ms / old_ms:.3f}, per round median {q[1]:.3f} "
-        f"(quartiles {q[0]:.3f}–{q[2]:.3f}); outputs equal: {equal}",
-        flush=True,
-    )
+    for kind, spent in (("CPU", cpu), ("wall", wall)):
+        ratios = sorted(b / a for a, b in zip(spent["old"], spent["new"], strict=True))
+        q = statistics.quantiles(ratios, n=4)
+        old_ms, new_ms = (sum(spent[k]) / (rounds * per_round) * 1e3 for k in ("old", "new"))
+        print(
+            f"{label}: {rounds} rounds × {per_round}; {kind} old {old_ms:.3f} ms, new "
+            f"{new_ms:.3f} ms; ratio of totals {new_ms / old_ms:.3f}, per round median "
+            f"{q[1]:.3f} (quartiles {q[0]:.3f}–{q[2]:.3f})",
+            flush=True,
+        )
+    print(f"{label}: outputs equal in every round: {equal}", flush=True)
     return equal
 
 
