@@ -13,7 +13,9 @@ shipped shoe ``tuned`` constant with c1 = 0. The chosen parameters and that
 start (the tuned constant) are then played on fresh training episodes
 (:data:`pednav_env.seeds.REEVALUATION_SEED`, the same whatever the episode set
 and CMA-ES seed, so searches are compared paired): the honest figure,
-``reevaluation``.
+``reevaluation``. The start is scored on the search episodes too
+(``start_objective_m``) and returned when no candidate beats it (``kept_start``):
+CMA-ES never evaluates its own mean.
 
     python -m agents.gait_rule_search --out runs/gait-rule [--episodes 16
         --generations 8 --popsize 8 --reevaluate 64 --seed 1 --episode-set 0]
@@ -106,7 +108,12 @@ def search(
         es.tell(list(xs), scores.tolist())
         history.append(float(scores.min()))
         print(f"generation {g + 1}/{generations}: best {scores.min():.3f} m", file=sys.stderr)
-    best = np.clip(np.asarray(es.result.xbest), -1, 1)
+    start_objective = float(rule_errors(to_params(x0[None, :]), seeds, base).mean())
+    kept_start = not float(es.result.fbest) < start_objective
+    if kept_start:
+        best, objective = x0, start_objective
+    else:
+        best, objective = np.clip(np.asarray(es.result.xbest), -1, 1), float(es.result.fbest)
     c = to_params(best)
     params = replace(base, c=tuple(float(v) for v in c))
     reevaluation = None
@@ -122,7 +129,9 @@ def search(
             "tuned_episode_errors_m": both[1].round(4).tolist(),
         }
     record = {
-        "objective_m": float(es.result.fbest),
+        "objective_m": objective,
+        "start_objective_m": start_objective,
+        "kept_start": kept_start,
         "evaluations": int(es.result.evaluations),
         "episodes": episodes,
         "episode_set": episode_set,

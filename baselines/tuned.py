@@ -173,6 +173,12 @@ def search(
     training episodes (seeds from :data:`REEVALUATION_SEED`), reported as
     ``reevaluation`` (the honest figure). ``x0``: the initial mean (default
     action 0, the paper's filter).
+
+    The start (``x0``) is scored on the search episodes too
+    (``start_objective_m``; for action 0 that is ``paper_objective_m``) and
+    returned when no candidate beats it (``kept_start``): CMA-ES never
+    evaluates its own mean, so a warm-started search could otherwise end above
+    its start.
     """
     import cma
 
@@ -205,7 +211,17 @@ def search(
     paper = constant_action_errors(env_id, np.zeros((1, action_dim)), ep_seeds, env_kwargs)
     if on_generation is not None:
         on_generation(1)
-    best = np.clip(np.asarray(es.result.xbest), -1, 1)
+    if x0 is None:
+        start_objective = float(paper.mean())  # the start is action 0, the paper's
+    else:
+        start_objective = float(
+            constant_action_errors(env_id, start_mean[None, :], ep_seeds, env_kwargs).mean()
+        )
+    kept_start = not float(es.result.fbest) < start_objective
+    if kept_start:
+        best, objective = start_mean.copy(), start_objective
+    else:
+        best, objective = np.clip(np.asarray(es.result.xbest), -1, 1), float(es.result.fbest)
     reevaluation = None
     if reevaluate_episodes:
         seeds = [REEVALUATION_SEED + i for i in range(reevaluate_episodes)]
@@ -220,8 +236,10 @@ def search(
         }
     return {
         "action": best.tolist(),
-        "objective_m": float(es.result.fbest),
+        "objective_m": objective,
         "paper_objective_m": float(paper.mean()),
+        "start_objective_m": start_objective,
+        "kept_start": kept_start,
         "evaluations": int(es.result.evaluations),
         "episodes": episodes,
         "episode_seeds": [ep_seeds[0], ep_seeds[-1]],

@@ -25,6 +25,10 @@ The four parts are independent; run them in one process or split over several
     PYTHONPATH=. .venv/bin/python benchmarks/calibrate_foot.py \\
         --merge /tmp/a.json /tmp/b.json --out benchmarks/results/calibrate_foot.json
 
+Each part scores its start point first (``START`` or ``--warm-start``'s values)
+and keeps it when the CMA-ES search finds nothing better; the output's
+``fit`` says which (``kept_start``, ``start_distance``, ``search_distance``).
+
 About 4–6 min of CPU per part with the defaults (1000 evaluations of 8 walks of
 20–30 s in each band holding recordings), and 1 min for its checks.
 
@@ -130,7 +134,10 @@ def run_part(part: str, stats: list[WalkStats], args: argparse.Namespace) -> dic
     if part != "all":
         out["held_out"] = check(folds[part], result.x)
     print(
-        f"{part}: distance {result.distance:.4f} after {result.evaluations} evaluations "
+        f"{part}: distance {result.distance:.4f} "
+        f"({'the start kept' if result.kept_start else 'the search'}; start "
+        f"{result.start_distance:.4f}, search {result.search_distance:.4f}) "
+        f"after {result.evaluations} evaluations "
         f"({result.cpu_s:.0f} s CPU, {time.perf_counter() - t0:.0f} s wall); in-sample covered "
         f"{out['in_sample']['covered']}/{out['in_sample']['total']}"
         + (

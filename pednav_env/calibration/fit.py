@@ -48,7 +48,9 @@ all bands (:func:`stride_distance`, :func:`coverage_distance`):
 
 The simulated walks of a fit use the same seeds at every evaluation (common
 random numbers), so the distance is a deterministic function of the
-parameters.
+parameters. A fit scores its start point first and returns it when the search
+finds nothing better (:func:`minimize_in_box`): CMA-ES never evaluates its own
+mean, and a warm-started search on a small budget can end above its start.
 """
 
 from __future__ import annotations
@@ -292,8 +294,9 @@ def distance(
 
 @dataclass
 class FitResult:
-    """The best parameters, their distance, and the best distance after each
-    generation (the convergence record)."""
+    """The returned parameters and their distance, the start point's distance,
+    whether the start was kept (the search found nothing better), and the
+    search's best distance after each generation (the convergence record)."""
 
     x: Array
     distance: float
@@ -301,11 +304,17 @@ class FitResult:
     cpu_s: float
     stop: dict[str, float]
     best_by_generation: list[float] = field(default_factory=list)
+    start_distance: float = float("nan")
+    search_distance: float = float("nan")
+    kept_start: bool = False
 
     def to_json(self) -> dict:
         return {
             "x": [round(float(v), 5) for v in self.x],
             "distance": round(self.distance, 5),
+            "start_distance": round(self.start_distance, 5),
+            "search_distance": round(self.search_distance, 5),
+            "kept_start": self.kept_start,
             "evaluations": self.evaluations,
             "generations": len(self.best_by_generation),
             "cpu_s": round(self.cpu_s, 1),
@@ -314,27 +323,34 @@ class FitResult:
         }
 
 
-def fit(
-    real: Sequence[WalkStats],
-    walks: int,
+def minimize_in_box(
+    objective: Callable[[Array], float],
+    x0: Sequence[float],
+    lower: Array,
+    upper: Array,
     max_evaluations: int,
     seed: int,
     popsize: int = 12,
-    progress: Callable[[int, float], None] | None = None,
-    x0: Sequence[float] | None = None,
     sigma0: float = 0.2,
+    progress: Callable[[int, float], None] | None = None,
 ) -> FitResult:
-    """CMA-ES (Hansen's ``cma``) in the box scaled to [0, 1]^n from ``x0``
-    (default :data:`START`; clipped to the box; 16 values fit
-    :data:`EXTENDED`), step ``sigma0`` in the scaled box, until
-    ``max_evaluations`` or its own convergence tests (a best-distance change
-    below 1e-3 over the recent generations)."""
-    if not real:
-        raise ValueError("fit: no recordings with a walking speed in a band")
-    x0 = START if x0 is None else np.asarray(x0, dtype=float)
-    lower, upper = box(x0.size)
+    """CMA-ES (Hansen's ``cma``) on ``objective`` in the box [lower, upper]
+    scaled to [0, 1]^n, from ``x0`` (clipped to the box), step ``sigma0`` in the
+    scaled box, until ``max_evaluations`` or its own convergence tests (a
+    best-value change below 1e-3 over the recent generations).
+
+    The start point is scored first and returned when no candidate of the
+    search beats it (``kept_start``): CMA-ES samples around its mean but never
+    evaluates the mean itself, so a warm-started search with a small budget can
+    otherwise end above where it started. The search itself (its candidates and
+    ``best_by_generation``) does not depend on the start's score.
+    ``progress(generation, best)`` is called after each generation with the
+    search's best so far."""
+    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     scale = upper - lower
-    start = np.clip(x0, lower, upper)
+    start = np.clip(np.asarray(x0, dtype=float), lower, upper)
+    t0 = time.process_time()
+    start_distance = float(objective(start))
     es = cma.CMAEvolutionStrategy(
         (start - lower) / scale,
         sigma0,
@@ -348,22 +364,56 @@ def fit(
             "verbose": -9,
         },
     )
-    t0 = time.process_time()
     history: list[float] = []
     while not es.stop():
         zs = es.ask()
-        es.tell(zs, [distance(lower + scale * np.asarray(z), real, walks, seed) for z in zs])
+        es.tell(zs, [objective(lower + scale * np.asarray(z)) for z in zs])
         history.append(float(es.result.fbest))
         if progress is not None:
             progress(len(history), history[-1])
-    x = lower + scale * np.asarray(es.result.xbest)
+    searched = float(es.result.fbest)
+    kept_start = not searched < start_distance
+    x = start if kept_start else lower + scale * np.asarray(es.result.xbest)
     return FitResult(
         x,
-        float(es.result.fbest),
-        int(es.result.evaluations),
+        start_distance if kept_start else searched,
+        int(es.result.evaluations) + 1,
         time.process_time() - t0,
         dict(es.stop()),
         history,
+        start_distance,
+        searched,
+        kept_start,
+    )
+
+
+def fit(
+    real: Sequence[WalkStats],
+    walks: int,
+    max_evaluations: int,
+    seed: int,
+    popsize: int = 12,
+    progress: Callable[[int, float], None] | None = None,
+    x0: Sequence[float] | None = None,
+    sigma0: float = 0.2,
+) -> FitResult:
+    """:func:`distance` to ``real`` minimised by :func:`minimize_in_box` from
+    ``x0`` (default :data:`START`; clipped to the box; 16 values fit
+    :data:`EXTENDED`): the better of the start and the search's best."""
+    if not real:
+        raise ValueError("fit: no recordings with a walking speed in a band")
+    x0 = START if x0 is None else np.asarray(x0, dtype=float)
+    lower, upper = box(x0.size)
+    return minimize_in_box(
+        lambda x: distance(x, real, walks, seed),
+        x0,
+        lower,
+        upper,
+        max_evaluations,
+        seed,
+        popsize,
+        sigma0,
+        progress,
     )
 
 

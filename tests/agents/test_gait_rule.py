@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 from testdata import DATA
 
+from agents import gait_rule_search
 from agents.cli import main
 from agents.evaluate import evaluate
 from agents.gait_rule import PARAMS_FILE, GaitRuleParams, GaitRulePolicy, read_params
 from agents.gait_rule_search import main as search_main
-from agents.gait_rule_search import rule_errors, tuned_start
+from agents.gait_rule_search import rule_errors, search, to_params, tuned_start
 from agents.policies import load_policy
 from baselines.tuned import constant_action_errors
 from pednav_env.envs.foot_core import OBS_FEATURES, FootZuptConfig
@@ -171,3 +172,35 @@ def test_search_cli_refuses_an_episode_set_out_of_range(tmp_path, capsys):
     assert search_main(args) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: episode_set must be in [0, 100)") and err.count("\n") == 1
+
+
+def _bowl(centre):
+    """A stand-in for the rule's errors: each parameter row's squared distance to
+    ``centre``, the same on every episode."""
+
+    def errors(cs, seeds, base):
+        d = np.sum((np.atleast_2d(cs) - np.asarray(centre)) ** 2, axis=1)
+        return np.repeat(d[:, None], len(seeds), axis=1)
+
+    return errors
+
+
+def test_search_keeps_its_start_when_no_candidate_beats_it(monkeypatch):
+    start = to_params(tuned_start())  # the bowl's minimum: no candidate reaches 0
+    monkeypatch.setattr(gait_rule_search, "rule_errors", _bowl(start))
+    params, record = search(episodes=2, generations=2, popsize=4, reevaluate_episodes=0)
+    assert record["kept_start"] is True
+    np.testing.assert_array_equal(params.c, start)
+    assert record["objective_m"] == 0.0 == record["start_objective_m"]
+    assert min(record["best_per_generation_m"]) > 0.0
+
+
+def test_search_returns_its_best_when_it_beats_the_start(monkeypatch):
+    centre = to_params(np.clip(tuned_start() + 0.3, -1, 1))
+    monkeypatch.setattr(gait_rule_search, "rule_errors", _bowl(centre))
+    params, record = search(episodes=2, generations=6, popsize=6, sigma0=0.3, reevaluate_episodes=0)
+    assert record["kept_start"] is False
+    start_distance = float(np.sum((to_params(tuned_start()) - centre) ** 2))
+    assert record["start_objective_m"] == pytest.approx(start_distance)
+    assert record["objective_m"] == min(record["best_per_generation_m"]) < start_distance
+    assert np.sum((np.asarray(params.c) - centre) ** 2) == pytest.approx(record["objective_m"])

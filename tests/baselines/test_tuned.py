@@ -92,3 +92,37 @@ def test_tune_writes_a_run_dir_and_installs_only_when_asked(tmp_path, monkeypatc
     table = json.loads(installed.read_text())
     assert set(table) == {"pednav/FootZupt-v0", env_id}  # other envs' entries kept
     assert table[env_id]["action"] == result["action"]  # same seed, same search
+
+
+def _bowl(centre):
+    """A stand-in for the env's errors: each action's squared distance to
+    ``centre``, the same on every episode."""
+
+    def errors(env_id, actions, episode_seeds, env_kwargs=None):
+        d = np.sum((np.atleast_2d(actions) - np.asarray(centre)) ** 2, axis=1)
+        return np.repeat(d[:, None], len(episode_seeds), axis=1)
+
+    return errors
+
+
+def test_tuned_search_keeps_a_warm_start_it_cannot_beat(monkeypatch):
+    # the start is the bowl's minimum (0): no sampled candidate reaches it
+    start = [0.3, -0.2, 0.1, 0.5]
+    monkeypatch.setattr(tuned_module, "constant_action_errors", _bowl(start))
+    res = tuned_module.search(ENV_ID, 4, episodes=2, generations=2, popsize=4, x0=start)
+    assert res["kept_start"] is True
+    assert res["action"] == start
+    assert res["objective_m"] == 0.0 == res["start_objective_m"]
+    assert min(res["best_per_generation_m"]) > 0.0
+    assert res["paper_objective_m"] == pytest.approx(0.39)
+
+
+def test_tuned_search_returns_the_search_when_it_beats_the_start(monkeypatch):
+    centre = [0.5, 0.5, -0.5, 0.5]
+    monkeypatch.setattr(tuned_module, "constant_action_errors", _bowl(centre))
+    res = tuned_module.search(ENV_ID, 4, episodes=2, generations=6, popsize=6, sigma0=0.3)
+    assert res["kept_start"] is False
+    # the default start is action 0, the paper's: scored as such
+    assert res["start_objective_m"] == res["paper_objective_m"] == pytest.approx(1.0)
+    assert res["objective_m"] == min(res["best_per_generation_m"]) < 1.0
+    assert np.sum((np.asarray(res["action"]) - centre) ** 2) == pytest.approx(res["objective_m"])

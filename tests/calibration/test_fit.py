@@ -20,7 +20,9 @@ from pednav_env.calibration.fit import (
     band_distance,
     coverage_distance,
     distance,
+    fit,
     groups,
+    minimize_in_box,
     parameter_set,
     pooled_w1,
     randomization,
@@ -141,3 +143,58 @@ def test_randomization_takes_the_optional_swing_speed_exponent() -> None:
     assert parameter_set(len(NAMES) + 1)[-1] is SWING_SPEED
     with pytest.raises(ValueError, match="15 or 16 values, got 14"):
         randomization(START[:-1])
+
+
+def _counted_bowl(centre: np.ndarray) -> tuple[list[np.ndarray], object]:
+    """A quadratic bowl with its minimum (0) at ``centre``, recording each point."""
+    calls: list[np.ndarray] = []
+
+    def objective(x: np.ndarray) -> float:
+        calls.append(np.array(x))
+        return float(np.sum((np.asarray(x) - centre) ** 2))
+
+    return calls, objective
+
+
+def test_minimize_keeps_the_start_when_the_search_cannot_beat_it() -> None:
+    # the start is the bowl's minimum: no sampled candidate can reach 0, so the
+    # search's best is above it and the start must come back, exactly
+    lower, upper = np.zeros(5), np.full(5, 10.0)
+    start = np.array([3.0, 4.0, 5.0, 6.0, 7.0])
+    calls, bowl = _counted_bowl(start)
+    result = minimize_in_box(bowl, start, lower, upper, 24, seed=0, popsize=12, sigma0=0.2)
+    assert result.kept_start
+    np.testing.assert_array_equal(result.x, start)
+    assert result.distance == 0.0 == result.start_distance
+    assert result.search_distance > 0.0
+    np.testing.assert_array_equal(calls[0], start)  # scored first
+    assert result.evaluations == len(calls)
+    assert result.to_json()["kept_start"] is True
+
+
+def test_minimize_returns_the_search_when_it_beats_the_start() -> None:
+    lower, upper = np.zeros(3), np.full(3, 10.0)
+    centre = np.array([5.0, 5.0, 5.0])
+    calls, bowl = _counted_bowl(centre)
+    result = minimize_in_box(bowl, [1.0, 9.0, 1.0], lower, upper, 300, seed=0, sigma0=0.3)
+    assert not result.kept_start
+    assert result.start_distance == pytest.approx(48.0)
+    assert result.distance == result.search_distance < 1.0
+    assert float(np.sum((result.x - centre) ** 2)) == pytest.approx(result.distance)
+    assert result.evaluations == len(calls)
+
+
+def test_minimize_clips_the_start_to_the_box() -> None:
+    calls, bowl = _counted_bowl(np.array([1.0, 1.0]))
+    result = minimize_in_box(bowl, [5.0, -5.0], np.zeros(2), np.ones(2), 12, seed=0)
+    np.testing.assert_array_equal(calls[0], [1.0, 0.0])
+    assert result.start_distance == pytest.approx(1.0)
+
+
+def test_fit_scores_its_start_and_returns_the_better(pseudo_recordings: list) -> None:
+    result = fit(pseudo_recordings, 2, 12, 7, popsize=6, x0=START, sigma0=0.3)
+    assert result.start_distance == distance(START, pseudo_recordings, 2, 7)
+    assert result.distance == min(result.start_distance, result.search_distance)
+    assert result.distance == distance(result.x, pseudo_recordings, 2, 7)
+    if result.kept_start:
+        np.testing.assert_array_equal(result.x, START)
