@@ -41,7 +41,7 @@ from gymnasium import spaces
 
 from agents.gait_rule import ENV_ID, FAMILY, N_PARAMS, GaitRuleParams, rule_actions, write_params
 from baselines.rollout import first_episode_errors
-from baselines.tuned import TunedFixedPolicy
+from baselines.tuned import TunedFixedPolicy, best_of_start_and_search
 from pednav_env.seeds import REEVALUATION_SEED, search_seeds
 
 #: c1 = SLOPE_SCALE · x1: a change of 1 in a0 (two decades of γ) per decade of the
@@ -109,11 +109,7 @@ def search(
         history.append(float(scores.min()))
         print(f"generation {g + 1}/{generations}: best {scores.min():.3f} m", file=sys.stderr)
     start_objective = float(rule_errors(to_params(x0[None, :]), seeds, base).mean())
-    kept_start = not float(es.result.fbest) < start_objective
-    if kept_start:
-        best, objective = x0, start_objective
-    else:
-        best, objective = np.clip(np.asarray(es.result.xbest), -1, 1), float(es.result.fbest)
+    best, objective, kept_start = best_of_start_and_search(es, x0, start_objective)
     c = to_params(best)
     params = replace(base, c=tuple(float(v) for v in c))
     reevaluation = None

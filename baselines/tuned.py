@@ -146,6 +146,17 @@ def _errors_task(job: tuple[str, np.ndarray, list[int], dict[str, Any] | None]) 
     return constant_action_errors(*job)
 
 
+def best_of_start_and_search(
+    es: Any, start: np.ndarray, start_objective: float
+) -> tuple[np.ndarray, float, bool]:
+    """The better of a CMA-ES search's start (scored on the same episodes as its
+    candidates: CMA-ES never evaluates its own mean) and its best candidate, in
+    [−1, 1]: ``(point, objective, kept_start)``; the start on a tie."""
+    if not float(es.result.fbest) < start_objective:
+        return np.array(start, dtype=float), float(start_objective), True
+    return np.clip(np.asarray(es.result.xbest), -1, 1), float(es.result.fbest), False
+
+
 def search(
     env_id: str,
     action_dim: int,
@@ -217,11 +228,7 @@ def search(
         start_objective = float(
             constant_action_errors(env_id, start_mean[None, :], ep_seeds, env_kwargs).mean()
         )
-    kept_start = not float(es.result.fbest) < start_objective
-    if kept_start:
-        best, objective = start_mean.copy(), start_objective
-    else:
-        best, objective = np.clip(np.asarray(es.result.xbest), -1, 1), float(es.result.fbest)
+    best, objective, kept_start = best_of_start_and_search(es, start_mean, start_objective)
     reevaluation = None
     if reevaluate_episodes:
         seeds = [REEVALUATION_SEED + i for i in range(reevaluate_episodes)]
