@@ -7,8 +7,13 @@ import argparse
 import json
 import sys
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 from agents.cli_types import positive_float, positive_int
+
+if TYPE_CHECKING:
+    from pednav_env.calibration.compare import SimModel
+    from pednav_env.replay.simulate import SimulatorModel
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -57,6 +62,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     check_output_path(args.out)  # before the simulation
     config = SimulateConfig(
+        model=_simulator_model(args.model),
         speed_mps=None if args.speed is None else tuple(args.speed),
         gait=args.gait,
         duration_s=args.duration,
@@ -74,23 +80,41 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sim_model(name: str) -> SimModel:
+    """``--model``: a named model of ``pednav sim2real`` or a fitted-parameter JSON file."""
+    from pathlib import Path
+
+    from pednav_env.calibration.compare import MODELS, model_from_json
+
+    if name in MODELS:
+        return MODELS[name]
+    if name.endswith(".json") or Path(name).exists():
+        return model_from_json(name)
+    raise ValueError(
+        f"--model {name!r}: use one of {', '.join(MODELS)} or a fitted-parameter .json file"
+    )
+
+
+def _simulator_model(name: str) -> SimulatorModel:
+    """``pednav simulate --model``: the default model unless another is named."""
+    from pednav_env.replay.simulate import DEFAULT_MODEL, SimulatorModel
+
+    if name == DEFAULT_MODEL.name:
+        return DEFAULT_MODEL
+    model = _sim_model(name)
+    stance = model.stance
+    return SimulatorModel(model.name, model.imu_grade, None if stance is None else lambda: stance)
+
+
 def _cmd_sim2real(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from pednav_env.calibration.compare import MODELS, compare, model_from_json
+    from pednav_env.calibration.compare import compare
     from pednav_env.calibration.sources import distinct_walks, load_walk
     from pednav_env.calibration.stats import walk_stats
     from pednav_env.io import find_recordings
 
-    if args.model in MODELS:
-        model = MODELS[args.model]
-    elif args.model.endswith(".json") or Path(args.model).exists():
-        model = model_from_json(args.model)
-    else:
-        raise ValueError(
-            f"--model {args.model!r}: use one of {', '.join(MODELS)} or a fitted-parameter "
-            ".json file"
-        )
+    model = _sim_model(args.model)
     if args.walks < 2:
         raise ValueError(f"--walks must be ≥ 2 (each band's spread), got {args.walks}")
     if args.plot is not None and Path(args.plot).exists() and not Path(args.plot).is_dir():
@@ -273,5 +297,11 @@ def add_recording_commands(sub: argparse._SubParsersAction) -> None:
         help="stand still for 1–5 s at the start of some legs (default on)",
     )
     si.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    si.add_argument(
+        "--model",
+        default="calibrated",
+        help="the simulator model, as pednav sim2real's --model: calibrated (default), "
+        "today, or a fitted-parameter JSON file",
+    )
     si.set_defaults(func=_cmd_simulate)
     _add_sim2real(sub)

@@ -36,6 +36,11 @@ About 4–6 min of CPU per part with the defaults (1000 evaluations of 8 walks o
 (:data:`pednav_env.calibration.fit.SWING_SPEED`), from 0 (today's behaviour; a
 15-value warm start is extended by it): the candidate of docs/SIM_TO_REAL.md
 ("Slow walkers"), stored as ``benchmarks/results/calibrate_foot_v3.json``.
+
+``--heel-rocker`` fits (and checks) the model whose walkers land the heel at rest
+on its footfall (``StanceRandomization.heel_rocker``, not a fitted value); the
+output's ``settings`` and ``randomization`` record it, and ``--recheck`` reads it
+from there.
 """
 
 from __future__ import annotations
@@ -71,11 +76,12 @@ CHECK_WALKS, CHECK_SEED = DEFAULT_WALKS_PER_BAND, 0
 CHECK_OTHER_SEEDS = (1, 2)
 
 
-def check(stats: list[WalkStats], x: np.ndarray) -> dict:
+def check(stats: list[WalkStats], x: np.ndarray, options: dict | None = None) -> dict:
     """``pednav sim2real``'s comparison of ``stats`` with the model ``x``: coverage,
     p10-only coverage, the largest envelope excess, and the distance of the fit
-    (its terms) measured on the check's walks."""
-    model = SimModel("calibrated", GRADE, randomization(x))
+    (its terms) measured on the check's walks; ``options`` fixed model options
+    (:func:`pednav_env.calibration.fit.randomization`)."""
+    model = SimModel("calibrated", GRADE, randomization(x, options))
     report = compare(stats, model, CHECK_WALKS, CHECK_SEED)
     covered, total = report.coverage
     other = [compare(stats, model, CHECK_WALKS, seed).coverage[0] for seed in CHECK_OTHER_SEEDS]
@@ -121,18 +127,27 @@ def run_part(part: str, stats: list[WalkStats], args: argparse.Namespace) -> dic
         x0 = json.loads(Path(args.warm_start).read_text())["parts"][part]["fit"]["x"]
     if args.swing_speed_exponent and len(x0) == len(NAMES):
         x0 = [*x0, SWING_SPEED.start]
+    options = model_options(args.heel_rocker)
     result = fit(
-        train, args.walks, args.max_evaluations, args.seed, args.popsize, log, x0, args.sigma0
+        train,
+        args.walks,
+        args.max_evaluations,
+        args.seed,
+        args.popsize,
+        log,
+        x0,
+        args.sigma0,
+        options,
     )
     out = {
         "train": sorted(s.name for s in train),
         "bands_trained": [int(k) for k in by_band(train)],
         "fit": result.to_json(),
-        "randomization": asdict(randomization(result.x)),
-        "in_sample": check(train, result.x),
+        "randomization": asdict(randomization(result.x, options)),
+        "in_sample": check(train, result.x, options),
     }
     if part != "all":
-        out["held_out"] = check(folds[part], result.x)
+        out["held_out"] = check(folds[part], result.x, options)
     print(
         f"{part}: distance {result.distance:.4f} "
         f"({'the start kept' if result.kept_start else 'the search'}; start "
@@ -148,6 +163,12 @@ def run_part(part: str, stats: list[WalkStats], args: argparse.Namespace) -> dic
         flush=True,
     )
     return out
+
+
+def model_options(heel_rocker: bool) -> dict:
+    """The fixed model options of a fit: ``heel_rocker`` only when set (a fit
+    without it builds the same StanceRandomization as before the option)."""
+    return {"heel_rocker": True} if heel_rocker else {}
 
 
 def load_stats(args: argparse.Namespace) -> list[WalkStats]:
@@ -180,6 +201,11 @@ def main() -> None:
         action="store_true",
         help="also fit the swing vigour's speed exponent (a 16th value, from 0)",
     )
+    ap.add_argument(
+        "--heel-rocker",
+        action="store_true",
+        help="walkers land the heel at rest on its footfall (StanceRandomization.heel_rocker)",
+    )
     ap.add_argument("--merge", nargs="+", metavar="JSON", help="join the outputs of parts")
     ap.add_argument(
         "--recheck",
@@ -198,12 +224,13 @@ def main() -> None:
         if args.recheck:
             stats = load_stats(args)
             folds = groups(stats)
+            options = model_options(result.get("settings", {}).get("heel_rocker", False))
             for name, part in result["parts"].items():
                 x = np.asarray(part["fit"]["x"])
                 train = [s for s in stats if s.name in set(part["train"])]
-                part["in_sample"] = check(train, x)
+                part["in_sample"] = check(train, x, options)
                 if name != "all":
-                    part["held_out"] = check(folds[name], x)
+                    part["held_out"] = check(folds[name], x, options)
                 print(f"{name}: rechecked", flush=True)
     else:
         stats = load_stats(args)
@@ -215,6 +242,7 @@ def main() -> None:
             "popsize": args.popsize,
             "seed": args.seed,
             "swing_speed_exponent": args.swing_speed_exponent,
+            "heel_rocker": args.heel_rocker,
         }
         for part in args.parts:
             result["parts"][part] = run_part(part, stats, args)

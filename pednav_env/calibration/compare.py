@@ -354,13 +354,16 @@ MODELS = {
 }
 #: Keys a fitted-parameter file may hold beside the StanceRandomization fields.
 _MODEL_FILE_KEYS = ("imu_grade",)
+#: StanceRandomization fields a fitted-parameter file gives as true or false.
+_MODEL_FILE_FLAGS = ("heel_rocker",)
 
 
 def model_from_json(path: str | Path) -> SimModel:
     """A simulator model from a fitted-parameter JSON file (``pednav sim2real
     --model PATH``): an object of :class:`StanceRandomization` fields (numbers;
-    ``flat_fraction`` may be null), optionally ``imu_grade`` (default the
-    recordings' ``microstrain_gx5``), or a ``benchmarks/calibrate_foot.py`` output,
+    ``flat_fraction`` may be null; ``heel_rocker`` true or false), optionally
+    ``imu_grade`` (default the recordings' ``microstrain_gx5``), or a
+    ``benchmarks/calibrate_foot.py`` output,
     whose top-level ``randomization`` is that object. Fields left out take
     StanceRandomization's defaults. The model is named after the file's stem.
 
@@ -383,7 +386,7 @@ def model_from_json(path: str | Path) -> SimModel:
     if not isinstance(data, dict):
         raise ValueError(f"{path}: expected a JSON object of model parameters")
     known = {f.name for f in fields(StanceRandomization)}
-    values: dict[str, float | None] = {}
+    values: dict[str, float | bool | None] = {}
     for key, value in data.items():
         if key in _MODEL_FILE_KEYS:
             continue
@@ -391,6 +394,10 @@ def model_from_json(path: str | Path) -> SimModel:
             raise ValueError(f"{path}: unknown key {key!r}; known: {', '.join(sorted(known))}")
         if value is None and key == "flat_fraction":
             values[key] = None
+        elif key in _MODEL_FILE_FLAGS:
+            if not isinstance(value, bool):
+                raise ValueError(f"{path}: key {key!r} must be true or false, got {value!r}")
+            values[key] = value
         elif isinstance(value, bool) or not isinstance(value, int | float):
             raise ValueError(f"{path}: key {key!r} must be a number, got {value!r}")
         else:

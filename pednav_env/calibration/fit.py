@@ -11,7 +11,9 @@ the heel-off/heel-strike share, and the swing vigour (log10 mean and spread of
 the scale of the swing's pitch knots). Optionally (:data:`SWING_SPEED`, a
 16th value) the swing vigour's speed exponent,
 :attr:`pednav_env.gait.stance_motion.StanceRandomization.swing_speed_exponent`,
-which the shipped fit holds at 0. The IMU grade is the recordings'
+which the shipped fit holds at 0. Model options that are not fitted (such as
+``heel_rocker``, :attr:`pednav_env.gait.stance_motion.StanceRandomization.heel_rocker`)
+are held fixed by ``options``. The IMU grade is the recordings'
 (``microstrain_gx5``).
 
 The distance (:func:`band_distance`), per speed band holding recordings,
@@ -56,7 +58,7 @@ mean, and a warm-started search on a small budget can end above its start.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import cma
@@ -162,9 +164,12 @@ def box(size: int) -> tuple[Array, Array]:
     return np.array([p.lower for p in ps]), np.array([p.upper for p in ps])
 
 
-def randomization(x: Sequence[float]) -> StanceRandomization:
+def randomization(
+    x: Sequence[float], options: Mapping[str, bool] | None = None
+) -> StanceRandomization:
     """The parameter vector (:data:`NAMES` order, then optionally
-    :data:`SWING_SPEED`; clipped to the box) as a StanceRandomization."""
+    :data:`SWING_SPEED`; clipped to the box) as a StanceRandomization, with the
+    fixed model ``options`` (StanceRandomization fields, e.g. ``heel_rocker``)."""
     x = np.asarray(x, dtype=float)
     lower, upper = box(x.size)
     x = np.clip(x, lower, upper)
@@ -186,6 +191,7 @@ def randomization(x: Sequence[float]) -> StanceRandomization:
         swing_pitch_scale=10 ** v["log10_swing_pitch_scale"],
         swing_pitch_log10_std=v["swing_pitch_log10_std"],
         swing_speed_exponent=v.get("swing_speed_exponent", 0.0),
+        **(options or {}),
     )
 
 
@@ -259,14 +265,15 @@ def distance(
     walks: int,
     seed: int,
     terms: dict[str, float] | None = None,
+    options: Mapping[str, bool] | None = None,
 ) -> float:
     """The distance (module docstring) of the parameters ``x`` to ``real``:
     the weighted sum over bands of :func:`band_distance` and of
     :func:`coverage_distance`, plus the stride term. Band k simulates ``walks``
     walks from seed ``seed · 100 + k``: the bands holding recordings, and those
     holding recorded strides (:func:`stride_bins`). ``terms``, if given,
-    receives the per-term sums."""
-    model = SimModel("fit", GRADE, randomization(x))
+    receives the per-term sums; ``options`` as in :func:`randomization`."""
+    model = SimModel("fit", GRADE, randomization(x, options))
     bands = by_band(real)
     total_recordings = sum(len(v) for v in bands.values())
     simulate = sorted(set(bands) | set(stride_bins(real)))
@@ -396,16 +403,18 @@ def fit(
     progress: Callable[[int, float], None] | None = None,
     x0: Sequence[float] | None = None,
     sigma0: float = 0.2,
+    options: Mapping[str, bool] | None = None,
 ) -> FitResult:
     """:func:`distance` to ``real`` minimised by :func:`minimize_in_box` from
     ``x0`` (default :data:`START`; clipped to the box; 16 values fit
-    :data:`EXTENDED`): the better of the start and the search's best."""
+    :data:`EXTENDED`; fixed model ``options`` as in :func:`randomization`): the
+    better of the start and the search's best."""
     if not real:
         raise ValueError("fit: no recordings with a walking speed in a band")
     x0 = START if x0 is None else np.asarray(x0, dtype=float)
     lower, upper = box(x0.size)
     return minimize_in_box(
-        lambda x: distance(x, real, walks, seed),
+        lambda x: distance(x, real, walks, seed, options=options),
         x0,
         lower,
         upper,

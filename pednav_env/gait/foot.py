@@ -28,7 +28,10 @@ its knots (stance, mid-swing). The ``realistic`` routes add, beyond the paper:
   A_mm = 0.2 v² mm and f = 9, 11, 13 Hz;
 - a heel-strike transient B·Im[s² e^{λs}], s = (t − t_hs)/τ, τ = 12 ms,
   λ = −1 + 3i, vertical and half of it forward, scaled to a peak acceleration
-  of 10 v² m/s²; it is C² at contact and decays within ~0.1 s.
+  of 10 v² m/s²; it is C² at contact and decays within ~0.1 s;
+- optionally (``StanceMotion.heel_rocker``) a heel that lands at rest on its
+  footfall and stays there while the foot rolls down
+  (:func:`pednav_env.gait.heel_rocker.heel_rocker_coefficients`).
 
 All outputs are batched over walkers: ``(N, T, ...)``.
 
@@ -60,6 +63,7 @@ from pednav_env.gait.foot_kernels import (
     simulate_walk,
 )
 from pednav_env.gait.foot_route import Route
+from pednav_env.gait.heel_rocker import heel_rocker_coefficients
 from pednav_env.gait.lever_arm import Vec, lever_arm_rows
 from pednav_env.gait.splines import clamped_cubic_coefficients
 from pednav_env.gait.stance_motion import COLUMNS as STANCE_COLUMNS
@@ -270,11 +274,14 @@ def build_schedule(route: Route) -> HeelSchedule:
         knots_t = np.stack((t_start, t_mid, t_end), axis=1)
         knots_y = np.stack((pose, mid, end), axis=1)
     n_int = knots_t.shape[1] - 1
+    motion = route.stance_motion
 
     # Pieces per stride: the constant stance, then the n_int cubic pieces.
     coefs = np.zeros((4, n_str, 1 + n_int, 6))
     coefs[3, :, 0] = pose
-    if n_str:
+    if n_str and realistic_knots and motion is not None and motion.heel_rocker:
+        coefs[:, :, 1:] = heel_rocker_coefficients(knots_t, knots_y)
+    elif n_str:
         coefs[:, :, 1:] = clamped_cubic_coefficients(knots_t, knots_y).reshape(4, n_str, n_int, 6)
     coefs = coefs.reshape(4, -1, 6)
     breaks = np.concatenate(([0.0], knots_t.ravel()))

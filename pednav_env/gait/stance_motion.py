@@ -33,6 +33,12 @@ k(v) = ``swing_pitch_scale`` · v^``swing_speed_exponent``
 unless set). Without ``flat_fraction`` the route keeps its own timing
 (paper 003's symmetric T₀ = T₂, T₁ = T₃).
 
+``heel_rocker`` (off by default) changes the heel strike of the walker's
+realistic strides: the heel comes to rest at its footfall at the heel-strike
+knot and stays there while the foot rotates down about it
+(:func:`pednav_env.gait.foot.build_schedule`); off, the heel runs on past the
+footfall and slides back (docs/SIM_TO_REAL.md).
+
 These functions are compiled into :mod:`pednav_env.gait.foot_kernels`, whose
 numba cache checks that module's file only: after editing this one, delete
 ``pednav_env/gait/__pycache__/foot_kernels.*.nb[ic]``.
@@ -78,8 +84,13 @@ class StanceMotion:
     heel_fraction: float = 0.16
     swing_pitch_scale: float = 1.0
     swing_speed_exponent: float = 0.0
+    heel_rocker: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.heel_rocker, bool):
+            raise ValueError(
+                f"StanceMotion.heel_rocker must be True or False, got {self.heel_rocker!r}"
+            )
         for name in ("quiet_rad", "edge_rad", "roll_rad", "stance_spread_log10"):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0 <= v < 1.0):
@@ -212,7 +223,9 @@ class StanceRandomization:
     to recorded walks (docs/SIM_TO_REAL.md, ``benchmarks/calibrate_foot.py``).
     ``swing_speed_exponent`` (every walker's, :meth:`StanceMotion.swing_scale`)
     needs ``flat_fraction`` (the walker's gait timing); 0 keeps the swing scale
-    independent of speed, as in :meth:`calibrated`.
+    independent of speed, as in :meth:`calibrated`. ``heel_rocker`` (every
+    walker's, :class:`StanceMotion`) lands the heel at rest on its footfall; off
+    in :meth:`calibrated`.
     """
 
     quiet_log10_mean: float = -3.0
@@ -234,8 +247,13 @@ class StanceRandomization:
     swing_pitch_scale: float = 1.0
     swing_pitch_log10_std: float = 0.0
     swing_speed_exponent: float = 0.0
+    heel_rocker: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.heel_rocker, bool):
+            raise ValueError(
+                f"StanceRandomization.heel_rocker must be True or False, got {self.heel_rocker!r}"
+            )
         for name in ("quiet_log10_std", "edge_log10_std", "swing_pitch_log10_std"):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0 <= v <= 2):
@@ -302,6 +320,7 @@ class StanceRandomization:
             roll_fraction=self.roll_fraction,
             stance_spread_log10=self.stance_spread_log10,
             seed=int(rng.integers(2**31)),
+            heel_rocker=self.heel_rocker,
             **self._draw_gait(rng),
         )
 

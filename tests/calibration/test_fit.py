@@ -145,6 +145,21 @@ def test_randomization_takes_the_optional_swing_speed_exponent() -> None:
         randomization(START[:-1])
 
 
+def test_randomization_holds_fixed_model_options() -> None:
+    assert randomization(START, {"heel_rocker": True}) == replace(
+        randomization(START), heel_rocker=True
+    )
+    assert randomization(START, {}) == randomization(START)
+
+
+def test_distance_simulates_with_the_fixed_options(pseudo_recordings: list) -> None:
+    # the heel strike is not among the fitted values: with the option held fixed the
+    # same walks are simulated with another heel strike, so the distance moves
+    base = distance(START, pseudo_recordings, 4, 7)
+    rocker = distance(START, pseudo_recordings, 4, 7, options={"heel_rocker": True})
+    assert rocker != base
+
+
 def _counted_bowl(centre: np.ndarray) -> tuple[list[np.ndarray], object]:
     """A quadratic bowl with its minimum (0) at ``centre``, recording each point."""
     calls: list[np.ndarray] = []

@@ -4,7 +4,7 @@ stance dynamics are tested in tests/gait/test_stance_motion.py."""
 from __future__ import annotations
 
 import json
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import pytest
@@ -133,6 +133,8 @@ def test_model_from_json_reads_a_fit_output_and_a_plain_object(tmp_path: Path) -
         ('{"quiet_log10_std": 5.0}', "quiet_log10_std must be in [0, 2]"),
         ('{"imu_grade": "phone"}', "key 'imu_grade' 'phone' unknown"),
         ('{"randomization": {"edge_log10_mean": null}}', "key 'edge_log10_mean'"),
+        ('{"heel_rocker": 1}', "key 'heel_rocker' must be true or false"),
+        ('{"heel_rocker": "yes"}', "key 'heel_rocker' must be true or false"),
     ],
 )
 def test_model_from_json_rejects_malformed_files(tmp_path: Path, text: str, message: str) -> None:
@@ -157,3 +159,14 @@ def test_cli_sim2real_model_file(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert main(["sim2real", str(PYSHOE_SAMPLE), "--model", str(bad)]) == 2
     err = capsys.readouterr().err.strip()
     assert "broken.json" in err and "'heel_fraction'" in err and "\n" not in err
+
+
+def test_model_from_json_reads_the_heel_rocker_flag(tmp_path: Path) -> None:
+    path = tmp_path / "rocker.json"
+    path.write_text(json.dumps({**asdict(StanceRandomization.calibrated()), "heel_rocker": True}))
+    assert model_from_json(path).stance == replace(
+        StanceRandomization.calibrated(), heel_rocker=True
+    )
+    # a fit output written before the flag existed has no such key: off
+    path.write_text(json.dumps({"randomization": {"flat_fraction": 0.3}}))
+    assert model_from_json(path).stance.heel_rocker is False

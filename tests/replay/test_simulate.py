@@ -143,3 +143,31 @@ def test_simulate_refuses_what_it_cannot_write_or_read_back(tmp_path, capsys, mo
         SimulateConfig(rate_hz=rate)
     with pytest.raises(ValueError, match="duration must be 5…7200 s"):
         SimulateConfig(duration_s=1e9)
+
+
+def test_simulate_model_option(tmp_path, capsys):
+    """``--model`` takes sim2real's named models and fitted-parameter files: a file
+    with ``heel_rocker`` simulates the same walker and route as the calibrated model
+    (the flag draws nothing), its heel landing at rest instead of running on."""
+    from dataclasses import asdict, replace
+
+    from pednav_env.gait.stance_motion import StanceRandomization
+
+    model = tmp_path / "rocker.json"
+    rocker = replace(StanceRandomization.calibrated(), heel_rocker=True)
+    model.write_text(json.dumps(asdict(rocker)))
+    walks = {}
+    for name in ("calibrated", str(model)):
+        out = tmp_path / f"{len(walks)}.csv"
+        argv = ["simulate", "--out", str(out), "--duration", "10", "--model", name]
+        assert main(argv) == 0
+        assert f"model {'rocker' if name.endswith('json') else 'calibrated'}," in (
+            capsys.readouterr().out
+        )
+        walks[name] = read_back(out)
+    base, other = walks["calibrated"], walks[str(model)]
+    np.testing.assert_array_equal(base["stance"], other["stance"])  # same route and timing
+    assert not np.array_equal(base["pos_x"], other["pos_x"])  # another heel strike
+    assert main(["simulate", "--out", str(tmp_path / "x.csv"), "--model", "nope"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("pednav: error: --model 'nope'") and err.count("\n") == 1
