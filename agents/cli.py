@@ -18,8 +18,8 @@ Subcommands (their JSON formats are contracts, see docs/CONTRACTS.md):
   options]`` — the ZUPT-UKF on a recorded walk or a folder of them
   (docs/REAL_DATA.md); the default policy is ``real-fixed``.
 - ``pednav simulate --out FILE [--speed LO HI | --gait G] [--duration S]
-  [--rate HZ] [--imu GRADE] [--stops/--no-stops] [--seed N]`` — a simulated
-  foot walk written as a CSV recording that ``pednav run`` reads.
+  [--rate HZ] [--imu GRADE] [--stops/--no-stops] [--seed N] [--model M]`` — a
+  simulated foot walk written as a CSV recording that ``pednav run`` reads.
 - ``pednav bench ENV [--json] [--sizes N ...]`` — env steps/s of the native
   vector env against a filterpy reference (ENV = foot, waist, marker).
 - ``pednav fit-rule RECORDING|DIR ... --out DIR [--folds K]`` — the gait-adaptive
