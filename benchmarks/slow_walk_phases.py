@@ -3,7 +3,8 @@ the calibrated simulator at the same walking speed (docs/SIM_TO_REAL.md, "Slow
 walkers: the mechanism").
 
     PYTHONPATH=. .venv/bin/python benchmarks/slow_walk_phases.py \
-        [--shared DIR] [--fits JSON] [--walks 60] [--seed 21200] [--json FILE]
+        [--shared DIR] [--fits JSON] [--walks 60] [--seed 21200] [--json FILE] \
+        [--heel-rocker]
 
 The walk-level p50 of log10 SHOE (``pednav sim2real``'s measure) is the level L
 at which the share F(L) of walking samples below L is one half. A recording's p50
@@ -239,6 +240,12 @@ def main() -> None:
     ap.add_argument("--scan-walks", type=int, default=24, help="simulated walks per scan speed")
     ap.add_argument("--explore-walks", type=int, default=40, help="walks per explored variant")
     ap.add_argument("--json", default=None)
+    ap.add_argument(
+        "--heel-rocker",
+        action="store_true",
+        help="every model of --fits with its walkers landing the heel at rest on its "
+        "footfall (StanceRandomization.heel_rocker)",
+    )
     args = ap.parse_args()
     shared = Path(args.shared)
     paths = sorted((shared / "pyshoe-vicon-dev").glob("*.mat"))
@@ -249,6 +256,9 @@ def main() -> None:
         recs[rec.name] = rec
     rows = {name: walk_row(rec, None) for name, rec in recs.items()}
     fits = json.loads(Path(args.fits).read_text())
+    if args.heel_rocker:
+        for part in fits["parts"].values():
+            part["randomization"]["heel_rocker"] = True
     misses = held_out_p50_misses(fits, {n: (r["speed"], r["p50"]) for n, r in rows.items()})
     cases = [(name, "all") for name in SLOW] + misses
     out = []
