@@ -41,6 +41,16 @@ About 4–6 min of CPU per part with the defaults (1000 evaluations of 8 walks o
 on its footfall (``StanceRandomization.heel_rocker``, not a fitted value); the
 output's ``settings`` and ``randomization`` record it, and ``--recheck`` reads it
 from there.
+
+``--cadence-law`` gives every simulated walker the walking cadence law
+f = a + b·v with a walker-to-walker spread
+(:class:`pednav_env.gait.stance_motion.StanceRandomization`'s ``cadence_*``
+fields), **regressed per part on that part's training recordings only**
+(:func:`pednav_env.calibration.cadence.fit_cadence_law` on their strides; not a
+CMA-ES value): a fold's law never sees its held-out group. The part's output
+holds the law (``cadence_law``) and its model options (``model_options``, also in
+its ``randomization``, so ``pednav sim2real --model`` reads them; ``--recheck``
+uses them); the start point is scored with the law.
 """
 
 from __future__ import annotations
@@ -53,6 +63,12 @@ from pathlib import Path
 
 import numpy as np
 
+from pednav_env.calibration.cadence import (
+    CadenceLaw,
+    RecordedStrides,
+    fit_cadence_law,
+    recorded_strides,
+)
 from pednav_env.calibration.compare import DEFAULT_WALKS_PER_BAND, SimModel, compare
 from pednav_env.calibration.fit import (
     GRADE,
@@ -117,7 +133,32 @@ def check(stats: list[WalkStats], x: np.ndarray, options: dict | None = None) ->
     }
 
 
-def run_part(part: str, stats: list[WalkStats], args: argparse.Namespace) -> dict:
+def cadence_values(law: CadenceLaw) -> dict[str, float]:
+    """The StanceRandomization fields of a fitted cadence law (5 digits)."""
+    return {
+        "cadence_intercept_hz": round(law.intercept_hz, 5),
+        "cadence_slope_hz_per_mps": round(law.slope_hz_per_mps, 5),
+        "cadence_log10_std": round(law.log10_std, 5),
+    }
+
+
+def load_strides(args: argparse.Namespace) -> dict[str, RecordedStrides]:
+    """Each recording's strides (:func:`recorded_strides`), by walk name."""
+    paths = sorted(Path(args.pyshoe).glob("*.mat"))
+    paths += sorted(Path(args.hallway).glob("*_LLIO.mat"))
+    out = {}
+    for p in paths:
+        samples = load_walk(p)
+        out[samples.name] = recorded_strides(samples)
+    return out
+
+
+def run_part(
+    part: str,
+    stats: list[WalkStats],
+    args: argparse.Namespace,
+    strides: dict[str, RecordedStrides] | None = None,
+) -> dict:
     folds = groups(stats)
     train = stats if part == "all" else [s for g, v in folds.items() if g != part for s in v]
     log = lambda gen, best: print(f"  [{part}] generation {gen}: best {best:.4f}", flush=True)  # noqa: E731
@@ -127,7 +168,17 @@ def run_part(part: str, stats: list[WalkStats], args: argparse.Namespace) -> dic
         x0 = json.loads(Path(args.warm_start).read_text())["parts"][part]["fit"]["x"]
     if args.swing_speed_exponent and len(x0) == len(NAMES):
         x0 = [*x0, SWING_SPEED.start]
-    options = model_options(args.heel_rocker)
+    options: dict = model_options(args.heel_rocker)
+    law = None
+    if strides is not None:
+        law = fit_cadence_law([strides[s.name] for s in train])
+        options.update(cadence_values(law))
+        print(
+            f"  [{part}] cadence law from the training recordings: f = "
+            f"{law.intercept_hz:.3f} + {law.slope_hz_per_mps:.3f} v Hz, walker spread "
+            f"{law.log10_std:.3f} (log10; {law.recordings} recordings, {law.strides} strides)",
+            flush=True,
+        )
     result = fit(
         train,
         args.walks,
@@ -146,6 +197,9 @@ def run_part(part: str, stats: list[WalkStats], args: argparse.Namespace) -> dic
         "randomization": asdict(randomization(result.x, options)),
         "in_sample": check(train, result.x, options),
     }
+    if law is not None:
+        out["cadence_law"] = asdict(law)
+        out["model_options"] = options
     if part != "all":
         out["held_out"] = check(folds[part], result.x, options)
     print(
@@ -206,6 +260,12 @@ def main() -> None:
         action="store_true",
         help="walkers land the heel at rest on its footfall (StanceRandomization.heel_rocker)",
     )
+    ap.add_argument(
+        "--cadence-law",
+        action="store_true",
+        help="give the walkers the cadence law f = a + b v (and its walker spread) "
+        "regressed on each part's TRAINING recordings' strides (not searched)",
+    )
     ap.add_argument("--merge", nargs="+", metavar="JSON", help="join the outputs of parts")
     ap.add_argument(
         "--recheck",
@@ -224,9 +284,10 @@ def main() -> None:
         if args.recheck:
             stats = load_stats(args)
             folds = groups(stats)
-            options = model_options(result.get("settings", {}).get("heel_rocker", False))
+            shared = model_options(result.get("settings", {}).get("heel_rocker", False))
             for name, part in result["parts"].items():
                 x = np.asarray(part["fit"]["x"])
+                options = part.get("model_options", shared)  # a part's cadence law too
                 train = [s for s in stats if s.name in set(part["train"])]
                 part["in_sample"] = check(train, x, options)
                 if name != "all":
@@ -243,9 +304,11 @@ def main() -> None:
             "seed": args.seed,
             "swing_speed_exponent": args.swing_speed_exponent,
             "heel_rocker": args.heel_rocker,
+            "cadence_law": args.cadence_law,
         }
+        strides = load_strides(args) if args.cadence_law else None
         for part in args.parts:
-            result["parts"][part] = run_part(part, stats, args)
+            result["parts"][part] = run_part(part, stats, args, strides)
             if args.out:
                 Path(args.out).write_text(json.dumps(result, indent=1))
     if "all" in result["parts"]:

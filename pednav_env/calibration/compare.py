@@ -361,7 +361,8 @@ _MODEL_FILE_FLAGS = ("heel_rocker",)
 def model_from_json(path: str | Path) -> SimModel:
     """A simulator model from a fitted-parameter JSON file (``pednav sim2real
     --model PATH``): an object of :class:`StanceRandomization` fields (numbers;
-    ``flat_fraction`` may be null; ``heel_rocker`` true or false), optionally
+    ``flat_fraction`` and ``cadence_intercept_hz`` may be null; ``heel_rocker`` true
+    or false), optionally
     ``imu_grade`` (default the recordings' ``microstrain_gx5``), or a
     ``benchmarks/calibrate_foot.py`` output,
     whose top-level ``randomization`` is that object. Fields left out take
@@ -392,7 +393,7 @@ def model_from_json(path: str | Path) -> SimModel:
             continue
         if key not in known:
             raise ValueError(f"{path}: unknown key {key!r}; known: {', '.join(sorted(known))}")
-        if value is None and key == "flat_fraction":
+        if value is None and key in ("flat_fraction", "cadence_intercept_hz"):
             values[key] = None
         elif key in _MODEL_FILE_FLAGS:
             if not isinstance(value, bool):

@@ -12,9 +12,10 @@ the scale of the swing's pitch knots). Optionally (:data:`SWING_SPEED`, a
 16th value) the swing vigour's speed exponent,
 :attr:`pednav_env.gait.stance_motion.StanceRandomization.swing_speed_exponent`,
 which the shipped fit holds at 0. Model options that are not fitted (such as
-``heel_rocker``, :attr:`pednav_env.gait.stance_motion.StanceRandomization.heel_rocker`)
-are held fixed by ``options``. The IMU grade is the recordings'
-(``microstrain_gx5``).
+``heel_rocker``, :attr:`pednav_env.gait.stance_motion.StanceRandomization.heel_rocker`,
+or a walking cadence law regressed on the training recordings,
+:mod:`pednav_env.calibration.cadence`) are held fixed by ``options``. The IMU
+grade is the recordings' (``microstrain_gx5``).
 
 The distance (:func:`band_distance`), per speed band holding recordings,
 weighted by the band's share of the recordings and summed: the
@@ -165,11 +166,12 @@ def box(size: int) -> tuple[Array, Array]:
 
 
 def randomization(
-    x: Sequence[float], options: Mapping[str, bool] | None = None
+    x: Sequence[float], options: Mapping[str, float | bool] | None = None
 ) -> StanceRandomization:
     """The parameter vector (:data:`NAMES` order, then optionally
     :data:`SWING_SPEED`; clipped to the box) as a StanceRandomization, with the
-    fixed model ``options`` (StanceRandomization fields, e.g. ``heel_rocker``)."""
+    fixed model ``options`` (StanceRandomization fields, e.g. ``heel_rocker`` or
+    the ``cadence_*`` law of :func:`pednav_env.calibration.cadence.fit_cadence_law`)."""
     x = np.asarray(x, dtype=float)
     lower, upper = box(x.size)
     x = np.clip(x, lower, upper)
@@ -265,7 +267,7 @@ def distance(
     walks: int,
     seed: int,
     terms: dict[str, float] | None = None,
-    options: Mapping[str, bool] | None = None,
+    options: Mapping[str, float | bool] | None = None,
 ) -> float:
     """The distance (module docstring) of the parameters ``x`` to ``real``:
     the weighted sum over bands of :func:`band_distance` and of
@@ -403,7 +405,7 @@ def fit(
     progress: Callable[[int, float], None] | None = None,
     x0: Sequence[float] | None = None,
     sigma0: float = 0.2,
-    options: Mapping[str, bool] | None = None,
+    options: Mapping[str, float | bool] | None = None,
 ) -> FitResult:
     """:func:`distance` to ``real`` minimised by :func:`minimize_in_box` from
     ``x0`` (default :data:`START`; clipped to the box; 16 values fit

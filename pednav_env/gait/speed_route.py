@@ -26,7 +26,9 @@ class SpeedRouteConfig:
 
     Gait by speed: slow walk below 0.75 m/s, walk below 1.25, fast walk below
     ``run_from_mps``, run from there. Walking cycle T = 1 / (0.55 + 0.3 v) s
-    (±7 %), i.e. 1.43 s at 0.5 m/s, 1.18 s at 1 m/s and 0.87 s at 2 m/s;
+    (±7 %), i.e. 1.43 s at 0.5 m/s, 1.18 s at 1 m/s and 0.87 s at 2 m/s, unless
+    the ``stance_motion`` walker has its own cadence law
+    (:meth:`pednav_env.gait.stance_motion.StanceMotion.stride_frequency_hz`);
     running cycles 0.65–0.8 s as in
     :class:`pednav_env.gait.foot_route.RouteRandomization`. Each leg draws
     one speed and each stride varies it by ±``speed_jitter`` (relative).
@@ -95,7 +97,12 @@ def speed_stride_shape(
     the other shape values drawn as in
     :func:`pednav_env.gait.foot_route.random_stride_shape`.
 
-    A ``walker`` with a ``flat_fraction`` sets the shares of a walking cycle
+    A ``walker`` with a ``cadence_intercept_hz`` sets the walking cycle's law
+    (:meth:`StanceMotion.stride_frequency_hz`, ±7 % jitter as the default's) and
+    the stride's geometry (swing height, toe-off and heel-strike pitch) follows its
+    length: it is the default stride's of the same nominal length
+    (:meth:`StanceMotion.shape_speed`). A
+    ``walker`` with a ``flat_fraction`` sets the shares of a walking cycle
     (:meth:`StanceMotion.cycle_fractions`; the drawn stance share less its mid-range
     0.34 is the stride's jitter) and scales the swing's pitch knots by its
     swing scale k(v) (:meth:`StanceMotion.swing_scale`; at most
@@ -110,14 +117,19 @@ def speed_stride_shape(
         heel_strike = -heel_strike
     else:
         jitter, a, d_height, d_toe_off, pitch, roll = rng.uniform(*_WALK_BOUNDS).tolist()
-        cycle = jitter / (0.55 + 0.3 * speed)
+        shape_speed = speed
+        if walker is None or walker.cadence_intercept_hz is None:
+            cycle = jitter / (0.55 + 0.3 * speed)
+        else:
+            cycle = jitter / walker.stride_frequency_hz(speed)
+            shape_speed = walker.shape_speed(speed)
         if walker is None or walker.flat_fraction is None:
             t0, t1, t2, t3 = a * cycle, (0.5 - a) * cycle, a * cycle, (0.5 - a) * cycle
         else:
             flat, heel, swing = walker.cycle_fractions(speed, a - _MID_STANCE_SHARE)
             t0, t1, t2, t3 = flat * cycle, heel * cycle, swing * cycle, heel * cycle
-        height = 0.06 + 0.04 * speed + d_height
-        toe_off, heel_strike = 0.4 + 0.3 * speed + d_toe_off, -(0.2 + 0.1 * speed)
+        height = 0.06 + 0.04 * shape_speed + d_height
+        toe_off, heel_strike = 0.4 + 0.3 * shape_speed + d_toe_off, -(0.2 + 0.1 * shape_speed)
     k = 1.0 if walker is None else walker.swing_scale(speed)
     if k != 1.0:
         top = MAX_SWING_PITCH_RAD

@@ -31,7 +31,14 @@ each, and swing 1 − f − 2h; the swing's pitch knots are scaled by
 k(v) = ``swing_pitch_scale`` · v^``swing_speed_exponent``
 (:meth:`StanceMotion.swing_scale`; exponent 0, a speed-independent scale,
 unless set). Without ``flat_fraction`` the route keeps its own timing
-(paper 003's symmetric T₀ = T₂, T₁ = T₃).
+(paper 003's symmetric T₀ = T₂, T₁ = T₃). Optionally a walker has its own
+walking cadence law, stride frequency f = a + b·v
+(:meth:`StanceMotion.stride_frequency_hz`; ``cadence_intercept_hz`` None, the
+default, keeps the route's 0.55 + 0.3 v); :class:`StanceRandomization` scales
+a and b by 10^(σ_c ξ) per walker (``cadence_log10_std``). With a law, a
+stride's swing height and pitch knots are those of the default stride of the
+same length (:meth:`StanceMotion.shape_speed`): a walker who walks slowly with
+short quick strides swings its foot through smaller angles.
 
 ``heel_rocker`` (off by default) changes the heel strike of the walker's
 realistic strides: the heel comes to rest at its footfall at the heel-strike
@@ -62,6 +69,43 @@ COLUMNS = ("quiet_rad", "edge_rad", "tau_hs_s", "tau_ho_s", "roll_rad", "roll_fr
 #: Bounds of a walking cycle's shares (:meth:`StanceMotion.cycle_fractions`).
 MIN_FLAT = 0.05
 MIN_SWING = 0.2
+#: The route's walking cadence law f = 0.55 + 0.3 v (Hz, v in m/s;
+#: :class:`pednav_env.gait.speed_route.SpeedRouteConfig`): intercept and slope.
+DEFAULT_CADENCE = (0.55, 0.3)
+#: Walking speeds (m/s) over which a cadence law must give a stride frequency
+#: within CADENCE_HZ_RANGE (the walking speeds of speed_route).
+CADENCE_CHECK_SPEEDS = (0.1, 2.0)
+CADENCE_HZ_RANGE = (0.3, 2.5)
+
+
+def check_cadence_law(owner: str, intercept_hz: float | None, slope_hz_per_mps: float) -> None:
+    """Raise ValueError naming ``owner``'s field unless the law a + b·v gives a
+    stride frequency in :data:`CADENCE_HZ_RANGE` at both ends of
+    :data:`CADENCE_CHECK_SPEEDS` (``intercept_hz`` None: the default law, and the
+    slope must be the default's)."""
+    if not math.isfinite(slope_hz_per_mps):
+        raise ValueError(
+            f"{owner}.cadence_slope_hz_per_mps must be finite, got {slope_hz_per_mps!r}"
+        )
+    if intercept_hz is None:
+        if slope_hz_per_mps != DEFAULT_CADENCE[1]:
+            raise ValueError(
+                f"{owner}.cadence_slope_hz_per_mps needs cadence_intercept_hz (the law "
+                f"a + b·v), got cadence_intercept_hz=None and slope {slope_hz_per_mps!r}"
+            )
+        return
+    if not math.isfinite(intercept_hz):
+        raise ValueError(f"{owner}.cadence_intercept_hz must be finite, got {intercept_hz!r}")
+    lo, hi = CADENCE_HZ_RANGE
+    for v in CADENCE_CHECK_SPEEDS:
+        f = intercept_hz + slope_hz_per_mps * v
+        if not lo <= f <= hi:
+            raise ValueError(
+                f"{owner}.cadence_intercept_hz, cadence_slope_hz_per_mps = {intercept_hz!r}, "
+                f"{slope_hz_per_mps!r} give {f:.3g} Hz at {v:g} m/s; the stride frequency "
+                f"must lie in [{lo:g}, {hi:g}] Hz over {CADENCE_CHECK_SPEEDS[0]:g}–"
+                f"{CADENCE_CHECK_SPEEDS[1]:g} m/s"
+            )
 
 
 @dataclass(frozen=True)
@@ -85,12 +129,15 @@ class StanceMotion:
     swing_pitch_scale: float = 1.0
     swing_speed_exponent: float = 0.0
     heel_rocker: bool = False
+    cadence_intercept_hz: float | None = None
+    cadence_slope_hz_per_mps: float = DEFAULT_CADENCE[1]
 
     def __post_init__(self) -> None:
         if not isinstance(self.heel_rocker, bool):
             raise ValueError(
                 f"StanceMotion.heel_rocker must be True or False, got {self.heel_rocker!r}"
             )
+        check_cadence_law("StanceMotion", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps)
         for name in ("quiet_rad", "edge_rad", "roll_rad", "stance_spread_log10"):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0 <= v < 1.0):
@@ -133,6 +180,27 @@ class StanceMotion:
                 f"StanceMotion.swing_speed_exponent must be in [−2, 2], "
                 f"got {self.swing_speed_exponent!r}"
             )
+
+    def stride_frequency_hz(self, speed_mps: float) -> float:
+        """The walker's walking stride frequency f = a + b·v (Hz) at ``speed_mps``:
+        ``cadence_intercept_hz`` + ``cadence_slope_hz_per_mps`` · v, or the route's
+        default 0.55 + 0.3 v when ``cadence_intercept_hz`` is None."""
+        if self.cadence_intercept_hz is None:
+            return DEFAULT_CADENCE[0] + DEFAULT_CADENCE[1] * speed_mps
+        return self.cadence_intercept_hz + self.cadence_slope_hz_per_mps * speed_mps
+
+    def shape_speed(self, speed_mps: float) -> float:
+        """The speed (m/s) whose stride under the default law 0.55 + 0.3 v has the
+        nominal length L = v / f(v) of this walker's stride at ``speed_mps``:
+        v' = 0.55 L / (1 − 0.3 L), at most 4 m/s. The route draws a stride's swing
+        height and pitch knots at v' (the foot's pitch at toe-off and heel strike
+        follows the step's geometry, its length, not the time taken; with the
+        default law v' = v). Without a cadence law: ``speed_mps`` itself."""
+        if self.cadence_intercept_hz is None:
+            return speed_mps
+        a, b = DEFAULT_CADENCE
+        length = speed_mps / self.stride_frequency_hz(speed_mps)
+        return a * length / max(1.0 - b * length, a * length / 4.0)
 
     def swing_scale(self, speed_mps: float) -> float:
         """The factor k(v) = ``swing_pitch_scale`` · v^``swing_speed_exponent`` on the
@@ -225,7 +293,10 @@ class StanceRandomization:
     needs ``flat_fraction`` (the walker's gait timing); 0 keeps the swing scale
     independent of speed, as in :meth:`calibrated`. ``heel_rocker`` (every
     walker's, :class:`StanceMotion`) lands the heel at rest on its footfall; off
-    in :meth:`calibrated`.
+    in :meth:`calibrated`. ``cadence_intercept_hz``,
+    ``cadence_slope_hz_per_mps`` and ``cadence_log10_std`` set every walker's
+    cadence law (module docstring; None, the default and :meth:`calibrated`'s,
+    keeps the route's law and draws nothing more from the generator).
     """
 
     quiet_log10_mean: float = -3.0
@@ -248,11 +319,27 @@ class StanceRandomization:
     swing_pitch_log10_std: float = 0.0
     swing_speed_exponent: float = 0.0
     heel_rocker: bool = False
+    cadence_intercept_hz: float | None = None
+    cadence_slope_hz_per_mps: float = DEFAULT_CADENCE[1]
+    cadence_log10_std: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.heel_rocker, bool):
             raise ValueError(
                 f"StanceRandomization.heel_rocker must be True or False, got {self.heel_rocker!r}"
+            )
+        check_cadence_law(
+            "StanceRandomization", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps
+        )
+        if not (math.isfinite(self.cadence_log10_std) and 0 <= self.cadence_log10_std <= 0.3):
+            raise ValueError(
+                "StanceRandomization.cadence_log10_std must be in [0, 0.3], "
+                f"got {self.cadence_log10_std!r}"
+            )
+        if self.cadence_log10_std != 0.0 and self.cadence_intercept_hz is None:
+            raise ValueError(
+                "StanceRandomization.cadence_log10_std needs cadence_intercept_hz "
+                "(the cadence law), got cadence_intercept_hz=None"
             )
         for name in ("quiet_log10_std", "edge_log10_std", "swing_pitch_log10_std"):
             v = getattr(self, name)
@@ -322,7 +409,22 @@ class StanceRandomization:
             seed=int(rng.integers(2**31)),
             heel_rocker=self.heel_rocker,
             **self._draw_gait(rng),
+            **self._draw_cadence(rng),
         )
+
+    def _draw_cadence(self, rng: np.random.Generator) -> dict[str, float | None]:
+        """The walker's cadence law: the law a + b·v scaled by 10^(σ_c ξ), ξ one more
+        normal draw from ``rng`` only when ``cadence_intercept_hz`` is set (else the
+        route's default law and no draw). The scale is clipped so that the walker's
+        law stays valid (:func:`check_cadence_law`)."""
+        if self.cadence_intercept_hz is None:
+            return {}
+        a, b = self.cadence_intercept_hz, self.cadence_slope_hz_per_mps
+        scale = 10.0 ** (self.cadence_log10_std * float(rng.standard_normal()))
+        ends = [a + b * v for v in CADENCE_CHECK_SPEEDS]
+        lo, hi = CADENCE_HZ_RANGE
+        scale = min(max(scale, lo / min(ends)), hi / max(ends))
+        return {"cadence_intercept_hz": scale * a, "cadence_slope_hz_per_mps": scale * b}
 
     def _draw_gait(self, rng: np.random.Generator) -> dict[str, float | None]:
         """The walker's gait timing and swing vigour; two more normal draws from
