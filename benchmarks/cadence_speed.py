@@ -19,6 +19,13 @@ positions, the 8 hallway walks from their footprints; walking strides only,
   walker spread.
 
 No simulation, no seeds. ``--json`` writes every recording's strides and the laws.
+
+``--with-laws FITS --write FILE``: a copy of a ``benchmarks/calibrate_foot.py``
+output ``FITS`` whose every part's model gets the law of that part's training
+recordings (as ``calibrate_foot.py --cadence-law`` sets it: ``model_options`` and
+``randomization``, 5 digits), the fitted values unchanged: the quick check of a
+law on a fit without refitting, through ``calibrate_foot.py --merge FILE
+--recheck`` and ``slow_walk_phases.py --fits FILE`` (docs/SIM_TO_REAL.md).
 """
 
 from __future__ import annotations
@@ -125,12 +132,50 @@ def laws(walks: list[RecordedStrides]) -> dict[str, dict]:
     return out
 
 
+#: The law of each part of benchmarks/calibrate_foot.py: its training recordings.
+PART_LAWS = {
+    "all": "all",
+    "pyshoe_early": "train_without_pyshoe_early",
+    "pyshoe_late": "train_without_pyshoe_late",
+    "hallway": "train_without_hallway",
+}
+
+
+def with_laws(fits: dict, walks: list[RecordedStrides]) -> dict:
+    """``fits`` (a calibrate_foot.py output) with each part's training law set."""
+    out = json.loads(json.dumps(fits))
+    by_name = {w.name: w for w in walks}
+    for name, part in out["parts"].items():
+        law = fit_cadence_law([by_name[n] for n in part["train"]])
+        options = {
+            "cadence_intercept_hz": round(law.intercept_hz, 5),
+            "cadence_slope_hz_per_mps": round(law.slope_hz_per_mps, 5),
+            "cadence_log10_std": round(law.log10_std, 5),
+        }
+        part["cadence_law"] = asdict(law)
+        part["model_options"] = options
+        part["randomization"] = {**part["randomization"], **options}
+        print(f"{name}: f = {law.intercept_hz:.4f} + {law.slope_hz_per_mps:.4f} v")
+    if "all" in out["parts"]:
+        out["randomization"] = out["parts"]["all"]["randomization"]
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--shared", type=Path, default=ROOT.parent / "shared" / "data")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--with-laws", type=Path, metavar="FITS", help="a calibrate_foot.py output")
+    ap.add_argument("--write", type=Path, metavar="FILE", help="with --with-laws: write here")
     args = ap.parse_args()
+    if (args.with_laws is None) != (args.write is None):
+        raise SystemExit("--with-laws and --write go together")
     walks = load(args.shared)
+    if args.with_laws is not None:
+        fits = with_laws(json.loads(args.with_laws.read_text()), walks)
+        args.write.parent.mkdir(parents=True, exist_ok=True)
+        args.write.write_text(json.dumps(fits, indent=1))
+        return
     rec = recording_rows(walks)
     print(
         "| recording | group | strides | speed (m/s) | length (m) | cycle (s), 10–90 % "
