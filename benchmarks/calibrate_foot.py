@@ -51,6 +51,11 @@ CMA-ES value): a fold's law never sees its held-out group. The part's output
 holds the law (``cadence_law``) and its model options (``model_options``, also in
 its ``randomization``, so ``pednav sim2real --model`` reads them; ``--recheck``
 uses them); the start point is scored with the law.
+
+``--pitch-knots`` fits one value more, last: the stride length below which the
+swing's pitch knots shrink (:data:`pednav_env.calibration.fit.PITCH_KNOTS`,
+``StanceRandomization.pitch_knot_stride_m``), from 0 (off: a warm start without
+it is extended by 0, its own behaviour); combines with the options above.
 """
 
 from __future__ import annotations
@@ -73,6 +78,7 @@ from pednav_env.calibration.compare import DEFAULT_WALKS_PER_BAND, SimModel, com
 from pednav_env.calibration.fit import (
     GRADE,
     NAMES,
+    PITCH_KNOTS,
     START,
     SWING_SPEED,
     band_distance,
@@ -92,12 +98,14 @@ CHECK_WALKS, CHECK_SEED = DEFAULT_WALKS_PER_BAND, 0
 CHECK_OTHER_SEEDS = (1, 2)
 
 
-def check(stats: list[WalkStats], x: np.ndarray, options: dict | None = None) -> dict:
+def check(
+    stats: list[WalkStats], x: np.ndarray, options: dict | None = None, knots: bool = False
+) -> dict:
     """``pednav sim2real``'s comparison of ``stats`` with the model ``x``: coverage,
     p10-only coverage, the largest envelope excess, and the distance of the fit
     (its terms) measured on the check's walks; ``options`` fixed model options
-    (:func:`pednav_env.calibration.fit.randomization`)."""
-    model = SimModel("calibrated", GRADE, randomization(x, options))
+    (:func:`pednav_env.calibration.fit.randomization`, as ``knots``)."""
+    model = SimModel("calibrated", GRADE, randomization(x, options, knots))
     report = compare(stats, model, CHECK_WALKS, CHECK_SEED)
     covered, total = report.coverage
     other = [compare(stats, model, CHECK_WALKS, seed).coverage[0] for seed in CHECK_OTHER_SEEDS]
@@ -168,6 +176,9 @@ def run_part(
         x0 = json.loads(Path(args.warm_start).read_text())["parts"][part]["fit"]["x"]
     if args.swing_speed_exponent and len(x0) == len(NAMES):
         x0 = [*x0, SWING_SPEED.start]
+    knots = args.pitch_knots
+    if knots and len(x0) == len(NAMES) + int(args.swing_speed_exponent):
+        x0 = [*x0, PITCH_KNOTS.start]
     options: dict = model_options(args.heel_rocker)
     law = None
     if strides is not None:
@@ -189,19 +200,20 @@ def run_part(
         x0,
         args.sigma0,
         options,
+        knots,
     )
     out = {
         "train": sorted(s.name for s in train),
         "bands_trained": [int(k) for k in by_band(train)],
         "fit": result.to_json(),
-        "randomization": asdict(randomization(result.x, options)),
-        "in_sample": check(train, result.x, options),
+        "randomization": asdict(randomization(result.x, options, knots)),
+        "in_sample": check(train, result.x, options, knots),
     }
     if law is not None:
         out["cadence_law"] = asdict(law)
         out["model_options"] = options
     if part != "all":
-        out["held_out"] = check(folds[part], result.x, options)
+        out["held_out"] = check(folds[part], result.x, options, knots)
     print(
         f"{part}: distance {result.distance:.4f} "
         f"({'the start kept' if result.kept_start else 'the search'}; start "
@@ -266,6 +278,12 @@ def main() -> None:
         help="give the walkers the cadence law f = a + b v (and its walker spread) "
         "regressed on each part's TRAINING recordings' strides (not searched)",
     )
+    ap.add_argument(
+        "--pitch-knots",
+        action="store_true",
+        help="also fit the stride length below which the swing pitch knots shrink "
+        "(StanceRandomization.pitch_knot_stride_m; one value more, from 0 = off)",
+    )
     ap.add_argument("--merge", nargs="+", metavar="JSON", help="join the outputs of parts")
     ap.add_argument(
         "--recheck",
@@ -275,6 +293,7 @@ def main() -> None:
     ap.add_argument("--out", default=None, help="write the results as JSON here")
     args = ap.parse_args()
     names = [*NAMES, SWING_SPEED.name] if args.swing_speed_exponent else list(NAMES)
+    names += [PITCH_KNOTS.name] if args.pitch_knots else []
     result: dict = {"names": names, "parts": {}}
     if args.merge:
         for path in args.merge:
@@ -284,14 +303,16 @@ def main() -> None:
         if args.recheck:
             stats = load_stats(args)
             folds = groups(stats)
-            shared = model_options(result.get("settings", {}).get("heel_rocker", False))
+            settings = result.get("settings", {})
+            shared = model_options(settings.get("heel_rocker", False))
+            knots = settings.get("pitch_knots", False)
             for name, part in result["parts"].items():
                 x = np.asarray(part["fit"]["x"])
                 options = part.get("model_options", shared)  # a part's cadence law too
                 train = [s for s in stats if s.name in set(part["train"])]
-                part["in_sample"] = check(train, x, options)
+                part["in_sample"] = check(train, x, options, knots)
                 if name != "all":
-                    part["held_out"] = check(folds[name], x, options)
+                    part["held_out"] = check(folds[name], x, options, knots)
                 print(f"{name}: rechecked", flush=True)
     else:
         stats = load_stats(args)
@@ -305,6 +326,7 @@ def main() -> None:
             "swing_speed_exponent": args.swing_speed_exponent,
             "heel_rocker": args.heel_rocker,
             "cadence_law": args.cadence_law,
+            "pitch_knots": args.pitch_knots,
         }
         strides = load_strides(args) if args.cadence_law else None
         for part in args.parts:

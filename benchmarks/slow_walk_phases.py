@@ -4,7 +4,7 @@ walkers: the mechanism").
 
     PYTHONPATH=. .venv/bin/python benchmarks/slow_walk_phases.py \
         [--shared DIR] [--fits JSON] [--walks 60] [--seed 21200] [--json FILE] \
-        [--heel-rocker]
+        [--heel-rocker] [--pitch-knot-stride M]
 
 The walk-level p50 of log10 SHOE (``pednav sim2real``'s measure) is the level L
 at which the share F(L) of walking samples below L is one half. A recording's p50
@@ -246,6 +246,14 @@ def main() -> None:
         help="every model of --fits with its walkers landing the heel at rest on its "
         "footfall (StanceRandomization.heel_rocker)",
     )
+    ap.add_argument(
+        "--pitch-knot-stride",
+        type=float,
+        default=None,
+        metavar="M",
+        help="every model of --fits with its swing pitch knots shrinking below this "
+        "stride length (m; StanceRandomization.pitch_knot_stride_m)",
+    )
     args = ap.parse_args()
     shared = Path(args.shared)
     paths = sorted((shared / "pyshoe-vicon-dev").glob("*.mat"))
@@ -259,6 +267,9 @@ def main() -> None:
     if args.heel_rocker:
         for part in fits["parts"].values():
             part["randomization"]["heel_rocker"] = True
+    if args.pitch_knot_stride is not None:
+        for part in fits["parts"].values():
+            part["randomization"]["pitch_knot_stride_m"] = args.pitch_knot_stride
     misses = held_out_p50_misses(fits, {n: (r["speed"], r["p50"]) for n, r in rows.items()})
     cases = [(name, "all") for name in SLOW] + misses
     out = []

@@ -11,7 +11,10 @@ the heel-off/heel-strike share, and the swing vigour (log10 mean and spread of
 the scale of the swing's pitch knots). Optionally (:data:`SWING_SPEED`, a
 16th value) the swing vigour's speed exponent,
 :attr:`pednav_env.gait.stance_motion.StanceRandomization.swing_speed_exponent`,
-which the shipped fit holds at 0. Model options that are not fitted (such as
+which the shipped fit holds at 0. Optionally (:data:`PITCH_KNOTS`, one value
+more, last) the stride length below which the swing's pitch knots shrink,
+:attr:`pednav_env.gait.stance_motion.StanceRandomization.pitch_knot_stride_m`
+(0, off, in the shipped fit). Model options that are not fitted (such as
 ``heel_rocker``, :attr:`pednav_env.gait.stance_motion.StanceRandomization.heel_rocker`,
 or a walking cadence law regressed on the training recordings,
 :mod:`pednav_env.calibration.cadence`) are held fixed by ``options``. The IMU
@@ -145,37 +148,51 @@ UPPER = np.array([p.upper for p in PARAMETERS])
 #: (the shipped model's speed-independent scale).
 SWING_SPEED = Parameter("swing_speed_exponent", 0.0, -0.5, 1.5)
 EXTENDED = (*PARAMETERS, SWING_SPEED)
+#: The optional last value with ``knots``: the stride length (m) below which the
+#: swing's pitch knots shrink (StanceRandomization.pitch_knot_stride_m), start 0
+#: (off: today's knots at every length), box up to 1.2 m (about the route's
+#: default stride at 1 m/s, 1.18 m).
+PITCH_KNOTS = Parameter("pitch_knot_stride_m", 0.0, 0.0, 1.2)
 
 
-def parameter_set(size: int) -> tuple[Parameter, ...]:
+def parameter_set(size: int, knots: bool = False) -> tuple[Parameter, ...]:
     """The parameters of a vector of ``size`` values: :data:`PARAMETERS` (15) or
-    :data:`EXTENDED` (16)."""
-    if size == len(PARAMETERS):
-        return PARAMETERS
-    if size == len(EXTENDED):
-        return EXTENDED
+    :data:`EXTENDED` (16), followed by :data:`PITCH_KNOTS` when ``knots`` (one
+    value more)."""
+    base = size - 1 if knots else size
+    extra = (PITCH_KNOTS,) if knots else ()
+    if base == len(PARAMETERS):
+        return (*PARAMETERS, *extra)
+    if base == len(EXTENDED):
+        return (*EXTENDED, *extra)
     raise ValueError(
-        f"a parameter vector has {len(PARAMETERS)} or {len(EXTENDED)} values, got {size}"
+        f"a parameter vector{' with the pitch knots' if knots else ''} has "
+        f"{len(PARAMETERS) + len(extra)} or {len(EXTENDED) + len(extra)} values, got {size}"
     )
 
 
-def box(size: int) -> tuple[Array, Array]:
+def box(size: int, knots: bool = False) -> tuple[Array, Array]:
     """Lower and upper bounds of a vector of ``size`` values (:func:`parameter_set`)."""
-    ps = parameter_set(size)
+    ps = parameter_set(size, knots)
     return np.array([p.lower for p in ps]), np.array([p.upper for p in ps])
 
 
 def randomization(
-    x: Sequence[float], options: Mapping[str, float | bool] | None = None
+    x: Sequence[float],
+    options: Mapping[str, float | bool] | None = None,
+    knots: bool = False,
 ) -> StanceRandomization:
     """The parameter vector (:data:`NAMES` order, then optionally
-    :data:`SWING_SPEED`; clipped to the box) as a StanceRandomization, with the
-    fixed model ``options`` (StanceRandomization fields, e.g. ``heel_rocker`` or
-    the ``cadence_*`` law of :func:`pednav_env.calibration.cadence.fit_cadence_law`)."""
+    :data:`SWING_SPEED`, then with ``knots`` :data:`PITCH_KNOTS`; clipped to the
+    box) as a StanceRandomization, with the fixed model ``options``
+    (StanceRandomization fields, e.g. ``heel_rocker`` or the ``cadence_*`` law of
+    :func:`pednav_env.calibration.cadence.fit_cadence_law`)."""
     x = np.asarray(x, dtype=float)
-    lower, upper = box(x.size)
+    lower, upper = box(x.size, knots)
     x = np.clip(x, lower, upper)
-    v = dict(zip([p.name for p in parameter_set(x.size)], x.tolist(), strict=True))
+    v = dict(zip([p.name for p in parameter_set(x.size, knots)], x.tolist(), strict=True))
+    if knots:
+        options = {**(options or {}), "pitch_knot_stride_m": v["pitch_knot_stride_m"]}
     return StanceRandomization(
         quiet_log10_mean=v["quiet_log10_mean"],
         quiet_log10_std=v["quiet_log10_std"],
@@ -268,14 +285,16 @@ def distance(
     seed: int,
     terms: dict[str, float] | None = None,
     options: Mapping[str, float | bool] | None = None,
+    knots: bool = False,
 ) -> float:
     """The distance (module docstring) of the parameters ``x`` to ``real``:
     the weighted sum over bands of :func:`band_distance` and of
     :func:`coverage_distance`, plus the stride term. Band k simulates ``walks``
     walks from seed ``seed · 100 + k``: the bands holding recordings, and those
     holding recorded strides (:func:`stride_bins`). ``terms``, if given,
-    receives the per-term sums; ``options`` as in :func:`randomization`."""
-    model = SimModel("fit", GRADE, randomization(x, options))
+    receives the per-term sums; ``options`` and ``knots`` as in
+    :func:`randomization`."""
+    model = SimModel("fit", GRADE, randomization(x, options, knots))
     bands = by_band(real)
     total_recordings = sum(len(v) for v in bands.values())
     simulate = sorted(set(bands) | set(stride_bins(real)))
@@ -406,17 +425,19 @@ def fit(
     x0: Sequence[float] | None = None,
     sigma0: float = 0.2,
     options: Mapping[str, float | bool] | None = None,
+    knots: bool = False,
 ) -> FitResult:
     """:func:`distance` to ``real`` minimised by :func:`minimize_in_box` from
     ``x0`` (default :data:`START`; clipped to the box; 16 values fit
-    :data:`EXTENDED`; fixed model ``options`` as in :func:`randomization`): the
-    better of the start and the search's best."""
+    :data:`EXTENDED`; fixed model ``options`` and ``knots``, the last value
+    :data:`PITCH_KNOTS`, as in :func:`randomization`): the better of the start and
+    the search's best."""
     if not real:
         raise ValueError("fit: no recordings with a walking speed in a band")
     x0 = START if x0 is None else np.asarray(x0, dtype=float)
-    lower, upper = box(x0.size)
+    lower, upper = box(x0.size, knots)
     return minimize_in_box(
-        lambda x: distance(x, real, walks, seed, options=options),
+        lambda x: distance(x, real, walks, seed, options=options, knots=knots),
         x0,
         lower,
         upper,

@@ -106,7 +106,10 @@ def speed_stride_shape(
     (:meth:`StanceMotion.cycle_fractions`; the drawn stance share less its mid-range
     0.34 is the stride's jitter) and scales the swing's pitch knots by its
     swing scale k(v) (:meth:`StanceMotion.swing_scale`; at most
-    :data:`MAX_SWING_PITCH_RAD`). The draws from
+    :data:`MAX_SWING_PITCH_RAD`). A ``walker`` with a ``pitch_knot_stride_m`` L_k
+    then multiplies the toe-off, mid-swing and heel-strike pitch knots by
+    min(1, L / L_k), L the stride's length
+    (:meth:`StanceMotion.pitch_knot_factor`). The draws from
     ``rng`` are the same with or without a walker."""
     if gait is Gait.RUN:
         cycle, stance_frac, height, toe_off, heel_strike, pitch, roll = rng.uniform(
@@ -135,8 +138,12 @@ def speed_stride_shape(
         top = MAX_SWING_PITCH_RAD
         toe_off, heel_strike = min(k * toe_off, top), max(k * heel_strike, -top)
         pitch = min(max(k * pitch, -top), top)
+    length = speed * cycle
+    g = 1.0 if walker is None else walker.pitch_knot_factor(length)
+    if g != 1.0:
+        toe_off, heel_strike, pitch = g * toe_off, g * heel_strike, g * pitch
     return StrideShape.unchecked(
-        stride_length_m=speed * cycle,
+        stride_length_m=length,
         stance_s=t0,
         heel_off_s=t1,
         swing_s=t2,

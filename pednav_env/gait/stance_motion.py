@@ -40,6 +40,12 @@ stride's swing height and pitch knots are those of the default stride of the
 same length (:meth:`StanceMotion.shape_speed`): a walker who walks slowly with
 short quick strides swings its foot through smaller angles.
 
+``pitch_knot_stride_m`` L_k (0, the default, off) makes a stride's swing pitch
+knots (toe-off, mid-swing, heel strike) follow its length L all the way down:
+they are multiplied by min(1, L / L_k) (:meth:`StanceMotion.pitch_knot_factor`),
+today's knots for strides of at least L_k and a foot that hardly pitches in a
+shuffle (docs/SIM_TO_REAL.md, "Pitch knots that follow the stride length").
+
 ``heel_rocker`` (off by default) changes the heel strike of the walker's
 realistic strides: the heel comes to rest at its footfall at the heel-strike
 knot and stays there while the foot rotates down about it
@@ -76,6 +82,24 @@ DEFAULT_CADENCE = (0.55, 0.3)
 #: within CADENCE_HZ_RANGE (the walking speeds of speed_route).
 CADENCE_CHECK_SPEEDS = (0.1, 2.0)
 CADENCE_HZ_RANGE = (0.3, 2.5)
+
+
+#: Largest stride length (m) ``pitch_knot_stride_m`` may take.
+MAX_PITCH_KNOT_STRIDE_M = 3.0
+
+
+def check_pitch_knot_stride(owner: str, value: float) -> None:
+    """Raise ValueError naming ``owner``'s ``pitch_knot_stride_m`` unless it is a
+    number in [0, :data:`MAX_PITCH_KNOT_STRIDE_M`] m (0: off)."""
+    if isinstance(value, bool) or not (
+        isinstance(value, int | float)
+        and math.isfinite(value)
+        and 0.0 <= value <= MAX_PITCH_KNOT_STRIDE_M
+    ):
+        raise ValueError(
+            f"{owner}.pitch_knot_stride_m must be in [0, {MAX_PITCH_KNOT_STRIDE_M:g}] m "
+            f"(0: off), got {value!r}"
+        )
 
 
 def check_cadence_law(owner: str, intercept_hz: float | None, slope_hz_per_mps: float) -> None:
@@ -131,12 +155,14 @@ class StanceMotion:
     heel_rocker: bool = False
     cadence_intercept_hz: float | None = None
     cadence_slope_hz_per_mps: float = DEFAULT_CADENCE[1]
+    pitch_knot_stride_m: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.heel_rocker, bool):
             raise ValueError(
                 f"StanceMotion.heel_rocker must be True or False, got {self.heel_rocker!r}"
             )
+        check_pitch_knot_stride("StanceMotion", self.pitch_knot_stride_m)
         check_cadence_law("StanceMotion", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps)
         for name in ("quiet_rad", "edge_rad", "roll_rad", "stance_spread_log10"):
             v = getattr(self, name)
@@ -201,6 +227,14 @@ class StanceMotion:
         a, b = DEFAULT_CADENCE
         length = speed_mps / self.stride_frequency_hz(speed_mps)
         return a * length / max(1.0 - b * length, a * length / 4.0)
+
+    def pitch_knot_factor(self, stride_length_m: float) -> float:
+        """The factor min(1, L / L_k) on the swing pitch knots of a stride of length
+        L = ``stride_length_m`` (m), L_k = ``pitch_knot_stride_m``; 1 (today's knots)
+        when L_k is 0, the default."""
+        if self.pitch_knot_stride_m == 0.0:
+            return 1.0
+        return min(1.0, max(stride_length_m, 0.0) / self.pitch_knot_stride_m)
 
     def swing_scale(self, speed_mps: float) -> float:
         """The factor k(v) = ``swing_pitch_scale`` · v^``swing_speed_exponent`` on the
@@ -297,6 +331,8 @@ class StanceRandomization:
     ``cadence_slope_hz_per_mps`` and ``cadence_log10_std`` set every walker's
     cadence law (module docstring; None, the default and :meth:`calibrated`'s,
     keeps the route's law and draws nothing more from the generator).
+    ``pitch_knot_stride_m`` (every walker's; 0, off, in :meth:`calibrated`) shrinks
+    the swing pitch knots of strides shorter than it (module docstring).
     """
 
     quiet_log10_mean: float = -3.0
@@ -322,12 +358,14 @@ class StanceRandomization:
     cadence_intercept_hz: float | None = None
     cadence_slope_hz_per_mps: float = DEFAULT_CADENCE[1]
     cadence_log10_std: float = 0.0
+    pitch_knot_stride_m: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.heel_rocker, bool):
             raise ValueError(
                 f"StanceRandomization.heel_rocker must be True or False, got {self.heel_rocker!r}"
             )
+        check_pitch_knot_stride("StanceRandomization", self.pitch_knot_stride_m)
         check_cadence_law(
             "StanceRandomization", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps
         )
@@ -408,6 +446,7 @@ class StanceRandomization:
             stance_spread_log10=self.stance_spread_log10,
             seed=int(rng.integers(2**31)),
             heel_rocker=self.heel_rocker,
+            pitch_knot_stride_m=self.pitch_knot_stride_m,
             **self._draw_gait(rng),
             **self._draw_cadence(rng),
         )
