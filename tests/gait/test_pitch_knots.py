@@ -4,11 +4,14 @@ knots shrink with the stride's length below L_k, bad values are rejected."""
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from pednav_env.calibration.compare import model_from_json
 from pednav_env.calibration.fit import NAMES, PITCH_KNOTS, START, parameter_set, randomization
 from pednav_env.gait.foot_route import Gait
 from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
@@ -112,3 +115,13 @@ def test_the_fit_takes_the_length_as_its_last_value() -> None:
     assert randomization([*START, 5.0], knots=True).pitch_knot_stride_m == PITCH_KNOTS.upper
     with pytest.raises(ValueError, match="with the pitch knots has 16 or 17 values, got 15"):
         randomization(START, knots=True)
+
+
+def test_the_model_file_carries_the_length(tmp_path: Path) -> None:
+    good = tmp_path / "knots.json"
+    good.write_text(json.dumps({"flat_fraction": 0.3, "pitch_knot_stride_m": 0.8}))
+    assert model_from_json(good).stance.pitch_knot_stride_m == pytest.approx(0.8)
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"flat_fraction": 0.3, "pitch_knot_stride_m": -1}))
+    with pytest.raises(ValueError, match=r"bad\.json: .*pitch_knot_stride_m"):
+        model_from_json(bad)
