@@ -150,17 +150,6 @@ def cadence_values(law: CadenceLaw) -> dict[str, float]:
     }
 
 
-def load_strides(args: argparse.Namespace) -> dict[str, RecordedStrides]:
-    """Each recording's strides (:func:`recorded_strides`), by walk name."""
-    paths = sorted(Path(args.pyshoe).glob("*.mat"))
-    paths += sorted(Path(args.hallway).glob("*_LLIO.mat"))
-    out = {}
-    for p in paths:
-        samples = load_walk(p)
-        out[samples.name] = recorded_strides(samples)
-    return out
-
-
 def run_part(
     part: str,
     stats: list[WalkStats],
@@ -237,13 +226,23 @@ def model_options(heel_rocker: bool) -> dict:
     return {"heel_rocker": True} if heel_rocker else {}
 
 
-def load_stats(args: argparse.Namespace) -> list[WalkStats]:
-    """The statistics of the PyShoe trials and the hallway walks (``_LLIO.mat``)."""
+def load_recordings(
+    args: argparse.Namespace, strides: bool = False
+) -> tuple[list[WalkStats], dict[str, RecordedStrides] | None]:
+    """The statistics of the PyShoe trials and the hallway walks (``_LLIO.mat``),
+    and with ``strides`` each recording's strides (:func:`recorded_strides`) by
+    walk name; every file is read once."""
     if not (args.pyshoe and args.hallway):
         raise SystemExit("--pyshoe and --hallway are required (with --recheck too)")
     paths = sorted(Path(args.pyshoe).glob("*.mat"))
     paths += sorted(Path(args.hallway).glob("*_LLIO.mat"))
-    return [walk_stats(load_walk(p)) for p in paths]
+    stats, by_name = [], {}
+    for p in paths:
+        samples = load_walk(p)
+        stats.append(walk_stats(samples))
+        if strides:
+            by_name[samples.name] = recorded_strides(samples)
+    return stats, (by_name if strides else None)
 
 
 def main() -> None:
@@ -301,7 +300,7 @@ def main() -> None:
             result["parts"].update(part["parts"])
             result.update({k: v for k, v in part.items() if k != "parts"})
         if args.recheck:
-            stats = load_stats(args)
+            stats, _ = load_recordings(args)
             folds = groups(stats)
             settings = result.get("settings", {})
             shared = model_options(settings.get("heel_rocker", False))
@@ -315,7 +314,7 @@ def main() -> None:
                     part["held_out"] = check(folds[name], x, options, knots)
                 print(f"{name}: rechecked", flush=True)
     else:
-        stats = load_stats(args)
+        stats, strides = load_recordings(args, args.cadence_law)
         result["settings"] = {
             "warm_start": args.warm_start,
             "sigma0": args.sigma0,
@@ -328,7 +327,6 @@ def main() -> None:
             "cadence_law": args.cadence_law,
             "pitch_knots": args.pitch_knots,
         }
-        strides = load_strides(args) if args.cadence_law else None
         for part in args.parts:
             result["parts"][part] = run_part(part, stats, args, strides)
             if args.out:

@@ -24,7 +24,10 @@ import json
 from pathlib import Path
 
 import numpy as np
-from calibrate_foot import check, load_stats  # benchmarks/ (the script directory is on sys.path)
+from calibrate_foot import (  # benchmarks/ (the script directory is on sys.path)
+    check,
+    load_recordings,
+)
 
 from pednav_env.calibration.fit import SWING_SPEED, distance, groups
 
@@ -42,7 +45,7 @@ def main() -> None:
     fits = json.loads(Path(args.fits).read_text())
     starts = json.loads(Path(args.starts).read_text())
     walks, seed = fits["settings"]["walks"], fits["settings"]["seed"]
-    stats = load_stats(args)
+    stats, _ = load_recordings(args)
     folds = groups(stats)
     for part, stored in fits["parts"].items():
         train = [s for s in stats if s.name in set(stored["train"])]
