@@ -10,9 +10,12 @@ A **stride** runs from one footfall of the instrumented foot to its next:
   :func:`pednav_env.calibration.stats.walk_stats` cleans them (gaps and runs
   shorter than :data:`~pednav_env.calibration.stats.LABEL_MIN_RUN_S` closed and
   dropped), with two stance runs merged when the foot moves less than
-  :data:`MIN_SWING_M` horizontally or for less than :data:`MIN_SWING_S` between
-  them (PyShoe's labels also split a stance by gaps of 0.05–0.1 s in which the
-  foot does not move; a real swing moves it 0.15 m or more).
+  :data:`~pednav_env.calibration.stats.MIN_SWING_M` horizontally or for less
+  than :data:`~pednav_env.calibration.stats.MIN_SWING_S` between them
+  (:func:`pednav_env.calibration.stats.merge_split_stances`, which
+  ``walk_stats``' strides use too: PyShoe's labels also split a stance by gaps
+  of 0.05–0.1 s in which the foot does not move; a real swing moves it 0.15 m
+  or more).
 
 A stride is kept when it does not overlap a stand (stance ≥
 :data:`~pednav_env.calibration.stats.STAND_MIN_S`), lasts at most
@@ -43,15 +46,12 @@ from pednav_env.calibration.stats import (
     WalkSamples,
     clean_labels,
     long_runs,
+    merge_split_stances,
     runs,
 )
 
 Array = NDArray[np.float64]
 
-#: Two stance runs are one stance when the foot moves less than this (m) ...
-MIN_SWING_M = 0.05
-#: ... or for less than this (s) between them.
-MIN_SWING_S = 0.15
 #: A footfall-to-footfall interval longer than this (s) is not a stride.
 MAX_CYCLE_S = 3.0
 #: Strides slower than this (m/s) are steps on the spot, not walking.
@@ -106,15 +106,8 @@ def footfalls(samples: WalkSamples) -> tuple[NDArray[np.int64], Array, NDArray[n
         raise ValueError(f"{s.name}: strides need footprints, or stance labels and truth positions")
     clean = clean_labels(np.asarray(s.stance, dtype=bool), max(1, round(LABEL_MIN_RUN_S * rate)))
     stand = long_runs(clean, max(1, round(STAND_MIN_S * rate)))
-    starts, ends = runs(clean)
     pos = np.asarray(s.truth_pos, dtype=float)[:, :2]
-    keep = [0] if starts.size else []
-    for k in range(1, starts.size):
-        prev_end, start = int(ends[k - 1]), int(starts[k])
-        moved = float(np.linalg.norm(pos[start] - pos[max(prev_end - 1, 0)]))
-        if (start - prev_end) / rate >= MIN_SWING_S and not moved < MIN_SWING_M:
-            keep.append(k)
-    idx = starts[np.asarray(keep, dtype=np.int64)]
+    idx, _ = merge_split_stances(*runs(clean), rate, pos)
     return idx, pos[idx], stand
 
 

@@ -28,6 +28,13 @@ closed and dropped): PyShoe's labels flicker, and a pause split by a
 one-sample flicker would otherwise stay in the walking part (on the slow
 trials it moved p50 by up to a decade).
 
+Strides without footprints start at the stance runs of the cleaned labels,
+two runs merged into one stance when the foot moves less than
+:data:`MIN_SWING_M` or for less than :data:`MIN_SWING_S` between them
+(:func:`merge_split_stances`): the labels also split stances by short gaps in
+which the foot stays put, which would make a short false stride. Stands are
+found before the merge, on the cleaned labels alone.
+
 Stance comes, in this order of preference, from labels stored with the walk
 (PyShoe's ``zv_vicon_opt``, the simulator's truth), from the truth velocity
 (|v| below :data:`TRUTH_STANCE_SPEED_MPS`), or from the SHOE detector
@@ -69,6 +76,10 @@ DETECTOR_STAND_LOG10 = 6.0
 LABEL_MIN_RUN_S = 0.05
 #: Per stride, the percentile of log10 SHOE reported as its quietness (%).
 STRIDE_QUIET_PERCENT = 5.0
+#: Two stance runs are one stance when the foot moves less than this (m) ...
+MIN_SWING_M = 0.05
+#: ... or for less than this (s) between them (:func:`merge_split_stances`).
+MIN_SWING_S = 0.15
 
 
 class StanceSource(StrEnum):
@@ -151,11 +162,13 @@ class WalkSamples:
 class StrideStats:
     """Per-stride arrays, one entry per stride (strides overlapping a stand dropped).
 
-    A stride runs from one stance start (or footprint) to the next.
-    ``speed_mps`` is NaN without truth or footprints (the stride's path over
-    its duration); ``stance_s`` is the first stance run starting in the
-    stride; the medians are over the stride's stance and swing samples (NaN if
-    there are none); ``log_shoe_p5`` is its quietest 5 %.
+    A stride runs from one footprint to the next or, without footprints, from one
+    stance start to the next, the stance runs cleaned and split stances merged
+    (:func:`merge_split_stances`). ``speed_mps`` is NaN without truth or
+    footprints (the stride's path over its duration); ``stance_s`` is the first
+    stance run starting in the stride (a merged run with its gap); the medians
+    are over the stride's stance and swing samples (NaN if there are none);
+    ``log_shoe_p5`` is its quietest 5 %.
     """
 
     start_s: Array
@@ -297,6 +310,45 @@ def clean_labels(flags: Flags, min_samples: int) -> Flags:
     return long_runs(out, min_samples)
 
 
+def merge_split_stances(
+    starts: NDArray[np.int64],
+    ends: NDArray[np.int64],
+    rate_hz: float,
+    truth_pos: Array | None = None,
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Stance runs (``starts``, ``ends`` exclusive, as :func:`runs` gives them) with
+    split stances merged into one run from the first start to the last end.
+
+    PyShoe's VICON labels split some stances by gaps of 0.05–0.1 s in which the
+    foot does not move (5 mm or less), which the label cleaning does not close; a
+    real swing moves the foot 0.15 m or more. A run joins the one before it when
+    the gap between them is shorter than :data:`MIN_SWING_S`, or when the foot's
+    horizontal truth position moves less than :data:`MIN_SWING_M` from the last
+    sample of the earlier run to the first of the later one.
+
+    Without ``truth_pos`` (walks with labels or a detector only), or where either
+    of those two positions is missing (NaN), the time criterion alone decides: a
+    gap of :data:`MIN_SWING_S` or longer is a swing.
+    """
+    starts = np.asarray(starts, dtype=np.int64)
+    ends = np.asarray(ends, dtype=np.int64)
+    if starts.size < 2:
+        return starts, ends
+    pos = None if truth_pos is None else np.asarray(truth_pos, dtype=float)[:, :2]
+    keep_start, keep_end = [0], []
+    for k in range(1, starts.size):
+        prev_end, start = int(ends[k - 1]), int(starts[k])
+        same = (start - prev_end) / rate_hz < MIN_SWING_S
+        if not same and pos is not None:
+            # NaN (no reference) compares False: not merged on distance
+            same = bool(np.linalg.norm(pos[start] - pos[max(prev_end - 1, 0)]) < MIN_SWING_M)
+        if not same:
+            keep_end.append(k - 1)
+            keep_start.append(k)
+    keep_end.append(starts.size - 1)
+    return starts[keep_start], ends[keep_end]
+
+
 def truth_velocity_stance(truth_pos: Array, rate_hz: float) -> Flags:
     """Stance where the smoothed truth speed is below :data:`TRUTH_STANCE_SPEED_MPS`
     (samples without a reference are not stance)."""
@@ -387,7 +439,9 @@ def _no_strides() -> StrideStats:
 def _stride_stats(
     s: WalkSamples, stance: Flags, stand: Flags, log_t: Array, rate: float
 ) -> StrideStats:
-    """Per-stride statistics; strides from footprints or from clean stance starts."""
+    """Per-stride statistics; strides from footprints, or from the starts of the
+    clean stance runs with split stances merged (:func:`merge_split_stances`; the
+    merged run, its gap included, is the stride's stance)."""
     n = stance.size
     clean = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
     starts, ends = runs(clean)
@@ -395,6 +449,9 @@ def _stride_stats(
         bounds = np.asarray(s.footfall_index, dtype=np.int64)
         points = np.asarray(s.footprints_m, dtype=float)
     else:
+        starts, ends = merge_split_stances(starts, ends, rate, s.truth_pos)
+        for a, b in zip(starts, ends, strict=True):
+            clean[a:b] = True
         bounds = starts
         points = None
         if s.truth_pos is not None:

@@ -17,6 +17,7 @@ from pednav_env.calibration.stats import (
     WalkSamples,
     clean_labels,
     log10_shoe,
+    merge_split_stances,
     walk_stats,
 )
 from pednav_env.constants import STANDARD_GRAVITY
@@ -34,6 +35,14 @@ def _hand_walk() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     for _ in range(STRIDES):
         phases += [(SWING, W_SWING, False, 1.0), (STANCE, W_STANCE, True, 0.0)]
     phases.append((STAND, W_STAND, True, 0.0))
+    return _phase_walk(phases)
+
+
+def _phase_walk(
+    phases: list[tuple[int, float, bool, float]],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A walk along x from (samples, |ω|, stance, metres moved) phases, the foot
+    moving linearly over each phase."""
     omega, stance, x = [], [], [0.0]
     for n, w, st, dist in phases:
         omega += [w] * n
@@ -99,6 +108,93 @@ def test_walk_stats_from_labels_hand_computed() -> None:
     assert st.log_shoe_p5 == pytest.approx(
         np.full(4, 2 * math.log10(W_STANCE / SHOE_GYRO_SIGMA)), abs=1e-9
     )
+
+
+def _split_second_stance(gap: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The hand walk with its second walking stance's labels split by ``gap`` samples
+    in its middle; the foot and the IMU stay still there (PyShoe's flicker)."""
+    omega_b, f_b, stance, pos = _hand_walk()
+    middle = STAND + SWING + STANCE + SWING + STANCE // 2
+    stance[middle - gap // 2 : middle + gap - gap // 2] = False
+    return omega_b, f_b, stance, pos
+
+
+def test_a_stance_split_without_movement_is_one_stride() -> None:
+    # 16 samples (0.08 s): longer than the label cleaning's 10, so two runs remain
+    omega_b, f_b, stance, pos = _split_second_stance(16)
+    st = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos)).strides
+    # as without the split: 4 strides of 1 s at 1 m/s, the split stance 0.4 s whole
+    # (unmerged: a 0.24 s stride at 0 m/s, and a successor starting 0.24 s late)
+    assert st.count == STRIDES - 1
+    assert st.duration_s == pytest.approx(np.full(4, (SWING + STANCE) / RATE))
+    assert st.speed_mps == pytest.approx(np.full(4, 1.0 / ((SWING + STANCE) / RATE)))
+    assert st.stance_s[:3] == pytest.approx(np.full(3, STANCE / RATE))
+    assert st.stance_gyro_median == pytest.approx(np.full(4, W_STANCE))
+    assert st.swing_gyro_median == pytest.approx(np.full(4, W_SWING))
+
+
+def _short_swing_walk(samples: int, metres: float) -> WalkSamples:
+    """Stance A, 1 m swing, stance B, a short swing of ``samples`` moving ``metres``,
+    stance C, 1 m swing, stance D, 1 m swing, stance E into a stand."""
+    phases = [(STAND, W_STAND, True, 0.0), (SWING, W_SWING, False, 1.0)]
+    phases += [(STANCE, W_STANCE, True, 0.0), (SWING, W_SWING, False, 1.0)]
+    phases += [(40, W_STANCE, True, 0.0), (samples, W_SWING, False, metres)]
+    phases += [(40, W_STANCE, True, 0.0), (SWING, W_SWING, False, 1.0)]
+    phases += [(STANCE, W_STANCE, True, 0.0), (SWING, W_SWING, False, 1.0)]
+    phases.append((STANCE + STAND, W_STAND, True, 0.0))
+    omega_b, f_b, stance, pos = _phase_walk(phases)
+    return WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos)
+
+
+@pytest.mark.parametrize(
+    ("samples", "metres", "merged"),
+    [
+        (30, 0.06, False),  # 0.15 s, 6 cm: a real (short) swing, a stride of its own
+        (30, 0.04, True),  # 4 cm: below MIN_SWING_M
+        (28, 0.06, True),  # 0.14 s: below MIN_SWING_S
+    ],
+)
+def test_a_real_short_swing_is_not_merged(samples: int, metres: float, merged: bool) -> None:
+    st = walk_stats(_short_swing_walk(samples, metres)).strides
+    if merged:  # A → B, B → D (B and C one stance), D → E
+        want = [SWING + STANCE, 40 + samples + 40 + SWING, SWING + STANCE]
+        stance = [STANCE, 40 + samples + 40, STANCE]
+    else:  # A → B, B → C, C → D, D → E
+        want = [SWING + STANCE, 40 + samples, 40 + SWING, SWING + STANCE]
+        stance = [STANCE, 40, 40, STANCE]
+    assert st.duration_s == pytest.approx(np.array(want) / RATE)
+    assert st.stance_s == pytest.approx(np.array(stance) / RATE)
+    if not merged:
+        assert st.speed_mps[1] == pytest.approx(metres / ((40 + samples) / RATE))
+
+
+def test_without_truth_positions_only_the_gap_length_merges() -> None:
+    # labels alone: a 0.08 s split is merged, a 0.2 s one is a stride of its own
+    # (with truth positions the still foot would merge it)
+    for gap, strides in ((16, STRIDES - 1), (40, STRIDES)):
+        omega_b, f_b, stance, pos = _split_second_stance(gap)
+        labels_only = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=stance)).strides
+        assert labels_only.count == strides
+        with_truth = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos))
+        assert with_truth.strides.count == STRIDES - 1
+
+
+def test_merge_split_stances_rules() -> None:
+    starts, ends = np.array([0, 50, 100, 200]), np.array([40, 70, 160, 260])
+    pos = np.zeros((300, 3))
+    pos[70:100, 0] = np.linspace(0.0, 0.5, 30)  # the foot moves 0.5 m in gap 2 only
+    pos[100:, 0] = 0.5
+    pos[160:200, 0] = 0.5 + np.linspace(0.0, 0.02, 40)  # gap 3: 2 cm in 0.2 s
+    pos[200:, 0] = 0.52
+    # at 100 Hz: gap 1 (0.1 s) is short; gap 2 (0.3 s, 0.5 m) a swing; gap 3 still
+    s, e = merge_split_stances(starts, ends, 100.0, pos)
+    assert (s.tolist(), e.tolist()) == ([0, 100], [70, 260])
+    # no positions, or none where gap 3 is judged: the time criterion alone
+    s, e = merge_split_stances(starts, ends, 100.0)
+    assert (s.tolist(), e.tolist()) == ([0, 100, 200], [70, 160, 260])
+    pos[200, 0] = np.nan
+    s, e = merge_split_stances(starts, ends, 100.0, pos)
+    assert (s.tolist(), e.tolist()) == ([0, 100, 200], [70, 160, 260])
 
 
 def test_stride_quietness_is_the_quietest_five_percent() -> None:
