@@ -56,6 +56,16 @@ uses them); the start point is scored with the law.
 swing's pitch knots shrink (:data:`pednav_env.calibration.fit.PITCH_KNOTS`,
 ``StanceRandomization.pitch_knot_stride_m``), from 0 (off: a warm start without
 it is extended by 0, its own behaviour); combines with the options above.
+
+``--swing-term`` adds the fit distance's opt-in swing term (per stride-speed bin,
+the W1 of the strides' log10 swing |ω| median, ``stride_swing``;
+:func:`pednav_env.calibration.fit.swing_distance`), and the checks then report its
+per-bin W1 on the check's walks (``swing_w1_by_bin``). ``--coverage-walks N``
+measures the distance's coverage term on N other simulated walks per band
+(:func:`pednav_env.calibration.fit.coverage_seed`) instead of the W1 terms' walks;
+the checks are not affected (they measure coverage with ``pednav sim2real``'s own
+envelope). Both are stored in ``settings``; ``--recheck`` reads ``swing_term`` from
+there. Candidate v7 of docs/SIM_TO_REAL.md used both.
 """
 
 from __future__ import annotations
@@ -74,7 +84,13 @@ from pednav_env.calibration.cadence import (
     fit_cadence_law,
     recorded_strides,
 )
-from pednav_env.calibration.compare import DEFAULT_WALKS_PER_BAND, SimModel, compare
+from pednav_env.calibration.compare import (
+    DEFAULT_WALKS_PER_BAND,
+    SPEED_BANDS,
+    SimModel,
+    band_label,
+    compare,
+)
 from pednav_env.calibration.fit import (
     GRADE,
     NAMES,
@@ -86,6 +102,7 @@ from pednav_env.calibration.fit import (
     fit,
     groups,
     randomization,
+    swing_distance,
 )
 from pednav_env.calibration.sources import load_walk
 from pednav_env.calibration.stats import WalkStats, walk_stats
@@ -99,12 +116,18 @@ CHECK_OTHER_SEEDS = (1, 2)
 
 
 def check(
-    stats: list[WalkStats], x: np.ndarray, options: dict | None = None, knots: bool = False
+    stats: list[WalkStats],
+    x: np.ndarray,
+    options: dict | None = None,
+    knots: bool = False,
+    swing: bool = False,
 ) -> dict:
     """``pednav sim2real``'s comparison of ``stats`` with the model ``x``: coverage,
     p10-only coverage, the largest envelope excess, and the distance of the fit
     (its terms) measured on the check's walks; ``options`` fixed model options
-    (:func:`pednav_env.calibration.fit.randomization`, as ``knots``)."""
+    (:func:`pednav_env.calibration.fit.randomization`, as ``knots``). With
+    ``swing``, also the swing term's per-bin W1 on the check's walks
+    (``swing_w1_by_bin``, decades of rad/s)."""
     model = SimModel("calibrated", GRADE, randomization(x, options, knots))
     report = compare(stats, model, CHECK_WALKS, CHECK_SEED)
     covered, total = report.coverage
@@ -125,6 +148,12 @@ def check(
             for name, value in band_distance(b.real, b.sim).items():
                 terms[name] = terms.get(name, 0.0) + len(b.real) / total * value
     excess = [b.excess_width() for b in report.bands if b.real]
+    extra = {}
+    if swing:
+        sim = [s for b in report.bands for s in b.sim]
+        extra["swing_w1_by_bin"] = {
+            band_label(SPEED_BANDS[k]): round(v, 3) for k, v in swing_distance(stats, sim).items()
+        }
     return {
         "covered": covered,
         "covered_other_seeds": dict(zip(map(str, CHECK_OTHER_SEEDS), other, strict=True)),
@@ -137,6 +166,7 @@ def check(
         "w1_pooled_by_band": {
             f"{b.band[0]:g}": round(b.distance(), 3) for b in report.bands if b.real
         },
+        **extra,
         "text": report.format_text(),
     }
 
@@ -190,19 +220,21 @@ def run_part(
         args.sigma0,
         options,
         knots,
+        args.swing_term,
+        args.coverage_walks,
     )
     out = {
         "train": sorted(s.name for s in train),
         "bands_trained": [int(k) for k in by_band(train)],
         "fit": result.to_json(),
         "randomization": asdict(randomization(result.x, options, knots)),
-        "in_sample": check(train, result.x, options, knots),
+        "in_sample": check(train, result.x, options, knots, args.swing_term),
     }
     if law is not None:
         out["cadence_law"] = asdict(law)
         out["model_options"] = options
     if part != "all":
-        out["held_out"] = check(folds[part], result.x, options, knots)
+        out["held_out"] = check(folds[part], result.x, options, knots, args.swing_term)
     print(
         f"{part}: distance {result.distance:.4f} "
         f"({'the start kept' if result.kept_start else 'the search'}; start "
@@ -283,6 +315,19 @@ def main() -> None:
         help="also fit the stride length below which the swing pitch knots shrink "
         "(StanceRandomization.pitch_knot_stride_m; one value more, from 0 = off)",
     )
+    ap.add_argument(
+        "--swing-term",
+        action="store_true",
+        help="add the distance's swing term (per stride-speed bin, W1 of log10 swing |omega|)",
+    )
+    ap.add_argument(
+        "--coverage-walks",
+        type=int,
+        default=0,
+        metavar="N",
+        help="measure the distance's coverage term on N other simulated walks per band "
+        "(seeds disjoint from the W1 walks'); 0: on the W1 walks (default)",
+    )
     ap.add_argument("--merge", nargs="+", metavar="JSON", help="join the outputs of parts")
     ap.add_argument(
         "--recheck",
@@ -291,6 +336,8 @@ def main() -> None:
     )
     ap.add_argument("--out", default=None, help="write the results as JSON here")
     args = ap.parse_args()
+    if args.coverage_walks < 0:
+        ap.error(f"--coverage-walks must be >= 0, got {args.coverage_walks}")
     names = [*NAMES, SWING_SPEED.name] if args.swing_speed_exponent else list(NAMES)
     names += [PITCH_KNOTS.name] if args.pitch_knots else []
     result: dict = {"names": names, "parts": {}}
@@ -305,13 +352,14 @@ def main() -> None:
             settings = result.get("settings", {})
             shared = model_options(settings.get("heel_rocker", False))
             knots = settings.get("pitch_knots", False)
+            swing = settings.get("swing_term", False)
             for name, part in result["parts"].items():
                 x = np.asarray(part["fit"]["x"])
                 options = part.get("model_options", shared)  # a part's cadence law too
                 train = [s for s in stats if s.name in set(part["train"])]
-                part["in_sample"] = check(train, x, options, knots)
+                part["in_sample"] = check(train, x, options, knots, swing)
                 if name != "all":
-                    part["held_out"] = check(folds[name], x, options, knots)
+                    part["held_out"] = check(folds[name], x, options, knots, swing)
                 print(f"{name}: rechecked", flush=True)
     else:
         stats, strides = load_recordings(args, args.cadence_law)
@@ -326,6 +374,8 @@ def main() -> None:
             "heel_rocker": args.heel_rocker,
             "cadence_law": args.cadence_law,
             "pitch_knots": args.pitch_knots,
+            "swing_term": args.swing_term,
+            "coverage_walks": args.coverage_walks,
         }
         for part in args.parts:
             result["parts"][part] = run_part(part, stats, args, strides)

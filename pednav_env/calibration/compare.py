@@ -187,18 +187,40 @@ class BandComparison:
         }
 
 
-def stride_quietness_by_bin(walks: Sequence[WalkStats]) -> dict[int, NDArray[np.float64]]:
-    """The walks' per-stride quietness (5th percentile of log10 SHOE) by index
-    into :data:`SPEED_BANDS` of the stride's own speed (strides without a
-    speed or a quietness dropped)."""
+def stride_values_by_bin(
+    walks: Sequence[WalkStats], attr: str = "log_shoe_p5"
+) -> dict[int, NDArray[np.float64]]:
+    """The walks' per-stride values of the :class:`pednav_env.calibration.stats.StrideStats`
+    field ``attr`` by index into :data:`SPEED_BANDS` of the stride's own speed
+    (strides without a finite speed or value dropped; bins without a stride left out)."""
     speed = np.concatenate([w.strides.speed_mps for w in walks]) if walks else np.zeros(0)
-    p5 = np.concatenate([w.strides.log_shoe_p5 for w in walks]) if walks else np.zeros(0)
-    keep = np.isfinite(speed) & np.isfinite(p5)
+    value = np.concatenate([getattr(w.strides, attr) for w in walks]) if walks else np.zeros(0)
+    keep = np.isfinite(speed) & np.isfinite(value)
     out = {}
     for k, (lo, hi) in enumerate(SPEED_BANDS):
         m = keep & (speed >= lo) & (speed < hi)
         if m.any():
-            out[k] = p5[m]
+            out[k] = value[m]
+    return out
+
+
+def stride_quietness_by_bin(walks: Sequence[WalkStats]) -> dict[int, NDArray[np.float64]]:
+    """The walks' per-stride quietness (5th percentile of log10 SHOE) by index
+    into :data:`SPEED_BANDS` of the stride's own speed (strides without a
+    speed or a quietness dropped)."""
+    return stride_values_by_bin(walks, "log_shoe_p5")
+
+
+def stride_swing_by_bin(walks: Sequence[WalkStats]) -> dict[int, NDArray[np.float64]]:
+    """The walks' per-stride swing vigour, log10 of the median |ω| (rad/s) over the
+    stride's swing samples (``StrideStats.swing_gyro_median``), by index into
+    :data:`SPEED_BANDS` of the stride's own speed (strides without a speed, without
+    swing samples or with a zero median dropped)."""
+    out = {}
+    for k, v in stride_values_by_bin(walks, "swing_gyro_median").items():
+        v = v[v > 0]
+        if v.size:
+            out[k] = np.log10(v)
     return out
 
 

@@ -48,6 +48,24 @@ all bands (:func:`stride_distance`, :func:`coverage_distance`):
   (what ``pednav sim2real`` checks), which a distance between distributions
   alone does not ask for.
 
+Two opt-in changes to the distance (off by default; the shipped fit's
+distance is unchanged, candidate v7 of docs/SIM_TO_REAL.md):
+
+- **swing** (``swing=True``, :func:`swing_distance`), per stride-speed bin of
+  the stride term (:func:`stride_bins`), the W1 (decades of rad/s) between the
+  recorded and the simulated strides' swing vigour, log10 of the median |ω|
+  over the stride's swing samples
+  (:attr:`pednav_env.calibration.stats.StrideStats.swing_gyro_median`), averaged
+  over the bins with equal weight (a bin without a simulated stride counts
+  :data:`MISSING_BIN_DECADES`), weight :data:`SWING_WEIGHT`, term
+  ``stride_swing``: the only term that sees the swing's pitch knots
+  (``pitch_knot_stride_m``), which act on the stance measures only through the
+  swing's end;
+- **coverage on separate walks** (``coverage_walks`` N > 0): per band holding
+  recordings, N more simulated walks (seeds :func:`coverage_seed`, never those
+  of the W1 terms' walks) for the coverage term alone, so that a spread that
+  collapses on the W1 walks' few walkers is seen on other walkers.
+
 ``pednav sim2real``'s check is measured afterwards on other simulated walks
 (other seeds, longer walks), and on recordings the fit did not see
 (``benchmarks/calibrate_foot.py``'s leave-one-group-out folds).
@@ -75,6 +93,7 @@ from pednav_env.calibration.compare import (
     SimModel,
     band_of,
     stride_quietness_by_bin,
+    stride_swing_by_bin,
 )
 from pednav_env.calibration.stats import WalkStats
 from pednav_env.gait.stance_motion import StanceRandomization
@@ -106,6 +125,11 @@ MIN_STRIDES_PER_BIN = 10
 COVERAGE_PERCENT = (5.0, 95.0)
 #: The stride term's value for a bin the simulator has no stride in (decades).
 MISSING_BIN_DECADES = 2.0
+#: Weight of the opt-in swing term (decades of rad/s; like the stride term).
+SWING_WEIGHT = 1.0
+#: The opt-in coverage walks of band k use seed ``seed · 100 + 50 + k``
+#: (:func:`coverage_seed`); the W1 walks use ``seed · 100 + k``.
+COVERAGE_SEED_OFFSET = 50
 #: Probabilities at which the pooled W1 compares quantile functions.
 _POOLED_P = (np.arange(400) + 0.5) / 400
 
@@ -254,6 +278,36 @@ def stride_distance(real: Sequence[WalkStats], sim: Sequence[WalkStats]) -> dict
     }
 
 
+def swing_distance(real: Sequence[WalkStats], sim: Sequence[WalkStats]) -> dict[int, float]:
+    """Per stride-speed bin of :func:`stride_bins` holding recorded swing values,
+    the W1 (decades of rad/s) between the recorded and the simulated strides'
+    log10 swing |ω| median (:func:`pednav_env.calibration.compare.stride_swing_by_bin`);
+    a bin without simulated strides counts :data:`MISSING_BIN_DECADES`, as in
+    :func:`stride_distance`."""
+    rec, mod = stride_swing_by_bin(real), stride_swing_by_bin(sim)
+    return {
+        k: float(wasserstein_distance(rec[k], mod[k])) if k in mod else MISSING_BIN_DECADES
+        for k in stride_bins(real)
+        if k in rec
+    }
+
+
+def coverage_seed(seed: int, band: int, bands: int = len(SPEED_BANDS)) -> int:
+    """The seed of the opt-in coverage walks of band index ``band`` (of ``bands``):
+    ``seed · 100 + 50 + band``. The W1 walks of the same fit use ``seed · 100 + k``
+    with k < ``bands``, so the two sets cannot meet while ``bands`` ≤
+    :data:`COVERAGE_SEED_OFFSET` (50); more bands are refused (ValueError naming
+    ``bands``) rather than given colliding seeds."""
+    if bands > COVERAGE_SEED_OFFSET:
+        raise ValueError(
+            f"coverage_seed: bands = {bands} > {COVERAGE_SEED_OFFSET}; the coverage walks' "
+            "seeds would meet the W1 walks' seeds"
+        )
+    if not 0 <= band < bands:
+        raise ValueError(f"coverage_seed: band = {band} outside 0..{bands - 1}")
+    return seed * 100 + COVERAGE_SEED_OFFSET + band
+
+
 def coverage_distance(real: Sequence[WalkStats], sim: Sequence[WalkStats]) -> float:
     """The mean over ``real`` of how far (decades) its p10 and its p50 lie outside
     the 5–95 % range of ``sim``'s (one band's walks), summed over the two."""
@@ -286,6 +340,8 @@ def distance(
     terms: dict[str, float] | None = None,
     options: Mapping[str, float | bool] | None = None,
     knots: bool = False,
+    swing: bool = False,
+    coverage_walks: int = 0,
 ) -> float:
     """The distance (module docstring) of the parameters ``x`` to ``real``:
     the weighted sum over bands of :func:`band_distance` and of
@@ -293,7 +349,12 @@ def distance(
     walks from seed ``seed · 100 + k``: the bands holding recordings, and those
     holding recorded strides (:func:`stride_bins`). ``terms``, if given,
     receives the per-term sums; ``options`` and ``knots`` as in
-    :func:`randomization`."""
+    :func:`randomization`. Opt-in (module docstring): ``swing`` adds the swing
+    term (``stride_swing``, :func:`swing_distance`); ``coverage_walks`` N > 0
+    measures the coverage term on N other walks per band holding recordings (seed
+    :func:`coverage_seed`, no per-stride statistics) instead of the W1 walks."""
+    if coverage_walks < 0:
+        raise ValueError(f"distance: coverage_walks must be ≥ 0, got {coverage_walks}")
     model = SimModel("fit", GRADE, randomization(x, options, knots))
     bands = by_band(real)
     total_recordings = sum(len(v) for v in bands.values())
@@ -309,12 +370,18 @@ def distance(
         weight = len(rec) / total_recordings
         for name, value in band_distance(rec, sim).items():
             parts[name] = parts.get(name, 0.0) + weight * value
+        if coverage_walks:
+            cover_seed = coverage_seed(seed, k)
+            sim = model.simulate(SPEED_BANDS[k], coverage_walks, cover_seed, FIT_DURATION_S, False)
         parts["coverage"] = parts.get("coverage", 0.0) + (
             weight * COVERAGE_WEIGHT * coverage_distance(rec, sim)
         )
     strides = stride_distance(real, all_sim)
     if strides:
         parts["stride_p5"] = STRIDE_WEIGHT * float(np.mean(list(strides.values())))
+    swings = swing_distance(real, all_sim) if swing else {}
+    if swings:
+        parts["stride_swing"] = SWING_WEIGHT * float(np.mean(list(swings.values())))
     if terms is not None:
         terms.update(parts)
     return float(sum(parts.values()))
@@ -426,18 +493,30 @@ def fit(
     sigma0: float = 0.2,
     options: Mapping[str, float | bool] | None = None,
     knots: bool = False,
+    swing: bool = False,
+    coverage_walks: int = 0,
 ) -> FitResult:
     """:func:`distance` to ``real`` minimised by :func:`minimize_in_box` from
     ``x0`` (default :data:`START`; clipped to the box; 16 values fit
     :data:`EXTENDED`; fixed model ``options`` and ``knots``, the last value
-    :data:`PITCH_KNOTS`, as in :func:`randomization`): the better of the start and
+    :data:`PITCH_KNOTS`, as in :func:`randomization`; ``swing`` and
+    ``coverage_walks`` as in :func:`distance`): the better of the start and
     the search's best."""
     if not real:
         raise ValueError("fit: no recordings with a walking speed in a band")
     x0 = START if x0 is None else np.asarray(x0, dtype=float)
     lower, upper = box(x0.size, knots)
     return minimize_in_box(
-        lambda x: distance(x, real, walks, seed, options=options, knots=knots),
+        lambda x: distance(
+            x,
+            real,
+            walks,
+            seed,
+            options=options,
+            knots=knots,
+            swing=swing,
+            coverage_walks=coverage_walks,
+        ),
         x0,
         lower,
         upper,

@@ -10,8 +10,9 @@ import pytest
 from scipy.stats import wasserstein_distance
 
 from agents.choose_shoe import errors_by_recording, simulated_recordings
-from pednav_env.calibration.compare import MODELS, SimModel
+from pednav_env.calibration.compare import MODELS, SPEED_BANDS, SimModel
 from pednav_env.calibration.fit import (
+    COVERAGE_SEED_OFFSET,
     GRADE,
     MISSING_BIN_DECADES,
     NAMES,
@@ -19,6 +20,7 @@ from pednav_env.calibration.fit import (
     SWING_SPEED,
     band_distance,
     coverage_distance,
+    coverage_seed,
     distance,
     fit,
     groups,
@@ -27,6 +29,7 @@ from pednav_env.calibration.fit import (
     pooled_w1,
     randomization,
     stride_distance,
+    swing_distance,
 )
 from pednav_env.calibration.stats import SpeedSource, StanceSource, StrideStats, WalkStats
 from pednav_env.replay.setup import real_fixed_setup
@@ -42,11 +45,23 @@ def test_pooled_w1_matches_scipy() -> None:
     assert pooled_w1(a, b) == pytest.approx(wasserstein_distance(a, b), abs=1e-2)
 
 
-def _walk(level: float, stride_speeds: list[float] = (), stride_p5: list[float] = ()) -> WalkStats:
+def _walk(
+    level: float,
+    stride_speeds: list[float] = (),
+    stride_p5: list[float] = (),
+    swing_gyro: list[float] | None = None,
+) -> WalkStats:
     """A walk whose log10 SHOE is ``level`` throughout (p10 = p50 = level) and
-    whose strides have the given speeds and quietness."""
+    whose strides have the given speeds, quietness and swing |ω| medians (rad/s;
+    default 0, no swing value)."""
     n = len(stride_speeds)
-    cols = [np.zeros(n)] * 2 + [np.asarray(stride_speeds, float)] + [np.zeros(n)] * 5
+    swing = np.zeros(n) if swing_gyro is None else np.asarray(swing_gyro, float)
+    cols = (
+        [np.zeros(n)] * 2
+        + [np.asarray(stride_speeds, float)]
+        + [np.zeros(n)] * 3
+        + [swing, np.zeros(n)]
+    )
     return WalkStats(
         "w",
         200.0,
@@ -75,6 +90,69 @@ def test_stride_distance_by_stride_speed_bin() -> None:
     sim = [_walk(0.0, [1.1] * 30, [6.5] * 30)]
     out = stride_distance(real, sim)
     assert out == {1: pytest.approx(0.5), 3: MISSING_BIN_DECADES}
+
+
+def test_swing_distance_zero_for_identical_strides_and_grows_with_a_shift() -> None:
+    # 12 recorded strides at 1 m/s (bin 0.8–1.3) with swing |ω| medians 2, 3, 4 rad/s
+    # and 12 at 2 m/s (bin 1.8–2.6) at 5–7 rad/s; 5 at 0.5 m/s, too few for a bin
+    speeds = [1.0] * 12 + [2.0] * 12 + [0.5] * 5
+    swing = [2.0, 3.0, 4.0] * 4 + [5.0, 6.0, 7.0] * 4 + [1.0] * 5
+    real = [_walk(0.0, speeds, [6.0] * 29, swing)]
+    assert swing_distance(real, real) == {1: 0.0, 3: 0.0}
+    # every simulated swing twice as vigorous: log10 2 = 0.301 decades in each bin
+    louder = [_walk(0.0, speeds, [6.0] * 29, [2 * v for v in swing])]
+    out = swing_distance(real, louder)
+    assert out == {1: pytest.approx(np.log10(2.0)), 3: pytest.approx(np.log10(2.0))}
+    # four times: twice the W1; and a bin without simulated strides counts as missing
+    fast_only = [_walk(0.0, [2.0] * 12, [6.0] * 12, [4 * v for v in swing[12:24]])]
+    assert swing_distance(real, fast_only) == {
+        1: MISSING_BIN_DECADES,
+        3: pytest.approx(np.log10(4.0)),
+    }
+    # strides without a swing value (NaN, or zero samples) are left out on both sides
+    holes = [_walk(0.0, speeds + [1.0, 2.0], [6.0] * 31, swing + [np.nan, 0.0])]
+    assert swing_distance(holes, real) == {1: 0.0, 3: 0.0}
+
+
+def test_coverage_seeds_never_meet_the_w1_seeds() -> None:
+    for seed in (0, 7, 12_345):
+        for bands in range(1, COVERAGE_SEED_OFFSET + 1):
+            w1 = {seed * 100 + k for k in range(bands)}
+            cover = {coverage_seed(seed, k, bands) for k in range(bands)}
+            assert len(cover) == bands and not w1 & cover
+    assert coverage_seed(7, 2) == 752
+    with pytest.raises(ValueError, match="bands = 51"):
+        coverage_seed(7, 0, COVERAGE_SEED_OFFSET + 1)
+    with pytest.raises(ValueError, match="band = 5"):
+        coverage_seed(7, len(SPEED_BANDS))
+
+
+def test_distance_draws_the_coverage_walks_from_their_own_seeds(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    calls: list[tuple[int, int, int, bool]] = []
+
+    def fake_simulate(
+        self: SimModel,
+        band: tuple[float, float],
+        walks: int,
+        seed: int,
+        duration_s: tuple[float, float],
+        per_stride: bool = True,
+    ) -> list[WalkStats]:
+        calls.append((SPEED_BANDS.index(band), walks, seed, per_stride))
+        return [_walk(6.0 + 0.1 * i, [1.0] * 12, [6.0] * 12, [3.0] * 12) for i in range(walks)]
+
+    monkeypatch.setattr(SimModel, "simulate", fake_simulate)
+    real = [_walk(6.2, [1.0] * 12, [6.0] * 12, [3.0] * 12)]  # a walk at 1 m/s
+    terms: dict[str, float] = {}
+    distance(START, real, 4, 7, terms, coverage_walks=5, swing=True)
+    w1 = [c for c in calls if c[1] == 4]
+    cover = [c for c in calls if c[1] == 5]
+    assert [c[0] for c in w1] == [1] and [c[0] for c in cover] == [1]
+    assert w1[0][2] == 701 and w1[0][3] is True
+    assert cover[0][2] == 751 and cover[0][3] is False  # no per-stride statistics
+    assert terms["stride_swing"] == 0.0 and "coverage" in terms
 
 
 def test_groups_split_by_session_and_place() -> None:
@@ -150,6 +228,21 @@ def test_randomization_holds_fixed_model_options() -> None:
         randomization(START), heel_rocker=True
     )
     assert randomization(START, {}) == randomization(START)
+
+
+def test_distance_defaults_leave_the_shipped_distance_unchanged(pseudo_recordings: list) -> None:
+    plain: dict[str, float] = {}
+    base = distance(START, pseudo_recordings, 4, 7, plain)
+    explicit: dict[str, float] = {}
+    assert distance(START, pseudo_recordings, 4, 7, explicit, swing=False, coverage_walks=0) == base
+    assert explicit == plain and "stride_swing" not in plain
+    # the options change the distance only through their own terms
+    both: dict[str, float] = {}
+    distance(START, pseudo_recordings, 4, 7, both, swing=True, coverage_walks=4)
+    assert {k: v for k, v in both.items() if k not in ("coverage", "stride_swing")} == {
+        k: v for k, v in plain.items() if k != "coverage"
+    }
+    assert both["coverage"] != plain["coverage"]
 
 
 def test_distance_simulates_with_the_fixed_options(pseudo_recordings: list) -> None:
