@@ -14,6 +14,7 @@ from pednav_env.calibration.stats import (
     SHOE_GYRO_SIGMA,
     SpeedSource,
     StanceSource,
+    StrideStats,
     WalkSamples,
     clean_labels,
     log10_shoe,
@@ -96,18 +97,24 @@ def test_walk_stats_from_labels_hand_computed() -> None:
     assert s.log_shoe_p50 == pytest.approx(2 * math.log10(W_SWING / SHOE_GYRO_SIGMA), abs=1e-9)
     st = s.strides
     # strides between stance starts; the one leaving the first stand is dropped
-    assert st.count == STRIDES - 1
-    assert st.duration_s == pytest.approx(np.full(4, (SWING + STANCE) / RATE))
-    assert st.speed_mps == pytest.approx(np.full(4, 1.0 / ((SWING + STANCE) / RATE)))
-    assert st.stance_s[:3] == pytest.approx(np.full(3, STANCE / RATE))
-    assert st.stance_gyro_median == pytest.approx(np.full(4, W_STANCE))
-    assert st.swing_gyro_median == pytest.approx(np.full(4, W_SWING))
+    assert_hand_walk_strides(st)
     assert st.stance_accel_dev_median == pytest.approx(np.zeros(4), abs=1e-12)
     # a stride (stance start to stance start: 80 stance then 120 swing samples) holds
     # at least 76 pure-stance samples, 38 % of it: its 5th percentile is stance's
     assert st.log_shoe_p5 == pytest.approx(
         np.full(4, 2 * math.log10(W_STANCE / SHOE_GYRO_SIGMA)), abs=1e-9
     )
+
+
+def assert_hand_walk_strides(st: StrideStats) -> None:
+    """The hand walk's strides: 4 of 1 s at 1 m/s (the one leaving the first stand
+    dropped), stances of 0.4 s, stance and swing |ω| as built."""
+    assert st.count == STRIDES - 1
+    assert st.duration_s == pytest.approx(np.full(4, (SWING + STANCE) / RATE))
+    assert st.speed_mps == pytest.approx(np.full(4, 1.0 / ((SWING + STANCE) / RATE)))
+    assert st.stance_s[:3] == pytest.approx(np.full(3, STANCE / RATE))
+    assert st.stance_gyro_median == pytest.approx(np.full(4, W_STANCE))
+    assert st.swing_gyro_median == pytest.approx(np.full(4, W_SWING))
 
 
 def _split_second_stance(gap: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -125,12 +132,7 @@ def test_a_stance_split_without_movement_is_one_stride() -> None:
     st = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos)).strides
     # as without the split: 4 strides of 1 s at 1 m/s, the split stance 0.4 s whole
     # (unmerged: a 0.24 s stride at 0 m/s, and a successor starting 0.24 s late)
-    assert st.count == STRIDES - 1
-    assert st.duration_s == pytest.approx(np.full(4, (SWING + STANCE) / RATE))
-    assert st.speed_mps == pytest.approx(np.full(4, 1.0 / ((SWING + STANCE) / RATE)))
-    assert st.stance_s[:3] == pytest.approx(np.full(3, STANCE / RATE))
-    assert st.stance_gyro_median == pytest.approx(np.full(4, W_STANCE))
-    assert st.swing_gyro_median == pytest.approx(np.full(4, W_SWING))
+    assert_hand_walk_strides(st)
 
 
 def _short_swing_walk(samples: int, metres: float) -> WalkSamples:
