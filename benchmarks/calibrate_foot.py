@@ -2,7 +2,7 @@
 leave-one-group-out cross-validation.
 
 The parameters, the distance and the optimiser are those of
-:mod:`pednav_env.calibration.fit` (docs/SIM_TO_REAL.md). Parts:
+:mod:`pednav_env.calibration.fit` (its objective :mod:`pednav_env.calibration.objective`; docs/SIM_TO_REAL.md). Parts:
 
 - ``all``: a fit on all recordings (the shipped
   ``StanceRandomization.calibrated()``), then ``pednav sim2real``'s check on them
@@ -33,7 +33,7 @@ About 4–6 min of CPU per part with the defaults (1000 evaluations of 8 walks o
 20–30 s in each band holding recordings), and 1 min for its checks.
 
 ``--swing-speed-exponent`` fits a 16th value, the swing vigour's speed exponent
-(:data:`pednav_env.calibration.fit.SWING_SPEED`), from 0 (today's behaviour; a
+(:data:`pednav_env.calibration.parameters.SWING_SPEED`), from 0 (today's behaviour; a
 15-value warm start is extended by it): the candidate of docs/SIM_TO_REAL.md
 ("Slow walkers"), stored as ``benchmarks/results/calibrate_foot_v3.json``.
 
@@ -53,16 +53,16 @@ its ``randomization``, so ``pednav sim2real --model`` reads them; ``--recheck``
 uses them); the start point is scored with the law.
 
 ``--pitch-knots`` fits one value more, last: the stride length below which the
-swing's pitch knots shrink (:data:`pednav_env.calibration.fit.PITCH_KNOTS`,
+swing's pitch knots shrink (:data:`pednav_env.calibration.parameters.PITCH_KNOTS`,
 ``StanceRandomization.pitch_knot_stride_m``), from 0 (off: a warm start without
 it is extended by 0, its own behaviour); combines with the options above.
 
 ``--swing-term`` adds the fit distance's opt-in swing term (per stride-speed bin,
 the W1 of the strides' log10 swing |ω| median, ``stride_swing``;
-:func:`pednav_env.calibration.fit.swing_distance`), and the checks then report its
+:func:`pednav_env.calibration.objective.swing_distance`), and the checks then report its
 per-bin W1 on the check's walks (``swing_w1_by_bin``). ``--coverage-walks N``
 measures the distance's coverage term on N other simulated walks per band
-(:func:`pednav_env.calibration.fit.coverage_seed`) instead of the W1 terms' walks;
+(:func:`pednav_env.calibration.objective.coverage_seed`) instead of the W1 terms' walks;
 the checks are not affected (they measure coverage with ``pednav sim2real``'s own
 envelope). Both are stored in ``settings``; ``--recheck`` reads ``swing_term`` from
 there. Candidate v7 of docs/SIM_TO_REAL.md used both.
@@ -91,19 +91,9 @@ from pednav_env.calibration.compare import (
     band_label,
     compare,
 )
-from pednav_env.calibration.fit import (
-    GRADE,
-    NAMES,
-    PITCH_KNOTS,
-    START,
-    SWING_SPEED,
-    band_distance,
-    by_band,
-    fit,
-    groups,
-    randomization,
-    swing_distance,
-)
+from pednav_env.calibration.fit import fit, groups
+from pednav_env.calibration.objective import GRADE, band_distance, by_band, swing_distance
+from pednav_env.calibration.parameters import NAMES, PITCH_KNOTS, START, SWING_SPEED, randomization
 from pednav_env.calibration.sources import load_walk
 from pednav_env.calibration.stats import WalkStats, walk_stats
 
@@ -125,7 +115,7 @@ def check(
     """``pednav sim2real``'s comparison of ``stats`` with the model ``x``: coverage,
     p10-only coverage, the largest envelope excess, and the distance of the fit
     (its terms) measured on the check's walks; ``options`` fixed model options
-    (:func:`pednav_env.calibration.fit.randomization`, as ``knots``). With
+    (:func:`pednav_env.calibration.parameters.randomization`, as ``knots``). With
     ``swing``, also the swing term's per-bin W1 on the check's walks
     (``swing_w1_by_bin``, decades of rad/s)."""
     model = SimModel("calibrated", GRADE, randomization(x, options, knots))

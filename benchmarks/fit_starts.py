@@ -29,7 +29,9 @@ from calibrate_foot import (  # benchmarks/ (the script directory is on sys.path
     load_recordings,
 )
 
-from pednav_env.calibration.fit import SWING_SPEED, distance, groups
+from pednav_env.calibration.fit import groups
+from pednav_env.calibration.objective import distance
+from pednav_env.calibration.parameters import SWING_SPEED
 
 KEYS = ("covered", "covered_other_seeds", "p10_inside", "p50_inside", "total")
 

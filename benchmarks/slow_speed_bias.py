@@ -59,7 +59,7 @@ from pednav_env.calibration.compare import (
     band_of,
     compare,
 )
-from pednav_env.calibration.fit import GRADE
+from pednav_env.calibration.objective import GRADE
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import (
     LABEL_MIN_RUN_S,

@@ -9,5 +9,8 @@
 - :mod:`pednav_env.calibration.compare` — simulator models and the per-band
   comparison of ``pednav sim2real``;
 - :mod:`pednav_env.calibration.fit` — the CMA-ES fit of the calibrated model;
+- :mod:`pednav_env.calibration.objective` — the distance the fit minimises;
+- :mod:`pednav_env.calibration.parameters` — the fitted values and the walker
+  population they give;
 - :mod:`pednav_env.calibration.plots` — the comparison's figures.
 """

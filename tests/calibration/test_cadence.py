@@ -1,5 +1,5 @@
 """Recorded strides and the cadence law fitted to them (calibration.cadence), and the
-fit's fixed values (calibration.fit.randomization)."""
+fit's fixed values (calibration.parameters.randomization)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pednav_env.calibration.cadence import RecordedStrides, fit_cadence_law, recorded_strides
-from pednav_env.calibration.fit import START, randomization
+from pednav_env.calibration.parameters import START, randomization
 from pednav_env.calibration.stats import WalkSamples
 
 RATE = 100.0

@@ -1,4 +1,4 @@
-"""The calibration fit's objective (pednav_env.calibration.fit) and simulated
+"""The calibration fit (pednav_env.calibration.fit), its objective (.objective) and simulated
 walks as recordings for the real-data runner (agents.choose_shoe)."""
 
 from __future__ import annotations
@@ -11,25 +11,25 @@ from scipy.stats import wasserstein_distance
 
 from agents.choose_shoe import errors_by_recording, simulated_recordings
 from pednav_env.calibration.compare import MODELS, SPEED_BANDS, SimModel
-from pednav_env.calibration.fit import (
+from pednav_env.calibration.fit import fit, groups, minimize_in_box
+from pednav_env.calibration.objective import (
     COVERAGE_SEED_OFFSET,
     GRADE,
     MISSING_BIN_DECADES,
-    NAMES,
-    START,
-    SWING_SPEED,
     band_distance,
     coverage_distance,
     coverage_seed,
     distance,
-    fit,
-    groups,
-    minimize_in_box,
-    parameter_set,
     pooled_w1,
-    randomization,
     stride_distance,
     swing_distance,
+)
+from pednav_env.calibration.parameters import (
+    NAMES,
+    START,
+    SWING_SPEED,
+    parameter_set,
+    randomization,
 )
 from pednav_env.calibration.stats import SpeedSource, StanceSource, StrideStats, WalkStats
 from pednav_env.replay.setup import real_fixed_setup

@@ -1,5 +1,5 @@
 """The opt-in pitch knots that follow the stride length (gait.stance_motion,
-gait.speed_route, calibration.fit): off is today's route bit for bit, on the
+gait.speed_route, calibration.parameters): off is today's route bit for bit, on the
 knots shrink with the stride's length below L_k, bad values are rejected."""
 
 from __future__ import annotations
@@ -12,7 +12,13 @@ import numpy as np
 import pytest
 
 from pednav_env.calibration.compare import model_from_json
-from pednav_env.calibration.fit import NAMES, PITCH_KNOTS, START, parameter_set, randomization
+from pednav_env.calibration.parameters import (
+    NAMES,
+    PITCH_KNOTS,
+    START,
+    parameter_set,
+    randomization,
+)
 from pednav_env.gait.foot_route import Gait
 from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceMotion, StanceRandomization
