@@ -2,7 +2,8 @@
 leave-one-group-out cross-validation.
 
 The parameters, the distance and the optimiser are those of
-:mod:`pednav_env.calibration.fit` (its objective :mod:`pednav_env.calibration.objective`; docs/SIM_TO_REAL.md). Parts:
+:mod:`pednav_env.calibration.parameters`, :mod:`pednav_env.calibration.objective` and
+:mod:`pednav_env.calibration.fit` (docs/SIM_TO_REAL.md). Parts:
 
 - ``all``: a fit on all recordings (the shipped
   ``StanceRandomization.calibrated()``), then ``pednav sim2real``'s check on them
