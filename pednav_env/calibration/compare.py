@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.stats import wasserstein_distance
+from scipy.stats import binomtest, wasserstein_distance
 
 from pednav_env.calibration.sources import samples_from_simulation
 from pednav_env.calibration.stats import WalkStats, walk_stats
@@ -241,6 +241,18 @@ def _median_of(stats: Sequence[WalkStats], stride_attr: str) -> float | None:
     return float(np.median(values)) if values.size else None
 
 
+def coverage_interval(covered: int, total: int, confidence: float = 0.95) -> tuple[float, float]:
+    """The exact (Clopper–Pearson) interval of the share of recordings covered,
+    ``covered`` of ``total``: where the share for recordings of the same kind,
+    not only these, lies (scipy's ``binomtest(...).proportion_ci``)."""
+    if not 0 <= covered <= total or total < 1:
+        raise ValueError(
+            f"coverage_interval: need 0 ≤ covered ≤ total, total ≥ 1; got {covered}/{total}"
+        )
+    ci = binomtest(int(covered), int(total)).proportion_ci(confidence, method="exact")
+    return float(ci.low), float(ci.high)
+
+
 @dataclass(frozen=True)
 class Sim2RealReport:
     """The comparison over all bands, and the recordings left out (no speed)."""
@@ -263,6 +275,9 @@ class Sim2RealReport:
             "covered": covered,
             "recordings": total,
             "coverage_fraction": round(covered / total, 4) if total else None,
+            "coverage_ci95": (
+                [round(v, 4) for v in coverage_interval(covered, total)] if total else None
+            ),
             "max_envelope_excess_decades": round(max(excess), 3) if excess else None,
             "bands": [b.to_json() for b in self.bands],
             "unbanded": [s.summary() for s in self.unbanded],
@@ -314,7 +329,11 @@ class Sim2RealReport:
             )
         covered, total = self.coverage
         if total:
-            lines.append(f"covered: {covered}/{total} recordings ({100 * covered / total:.0f} %)")
+            lo, hi = coverage_interval(covered, total)
+            lines.append(
+                f"covered: {covered}/{total} recordings ({100 * covered / total:.0f} %; "
+                f"exact 95 % interval {100 * lo:.0f}-{100 * hi:.0f} %)"
+            )
         lines.append("medians over walks, real / sim: quiet share, quiet run (s), p90")
         for b in self.bands:
             if b.real:

@@ -8,6 +8,7 @@ from dataclasses import asdict, replace
 from pathlib import Path
 
 import pytest
+from scipy.stats import beta
 from testdata import PYSHOE_SAMPLE
 
 from agents.cli import main
@@ -17,6 +18,7 @@ from pednav_env.calibration.compare import (
     Sim2RealReport,
     band_of,
     compare,
+    coverage_interval,
     model_from_json,
 )
 from pednav_env.calibration.sources import load_walk
@@ -35,6 +37,27 @@ def test_compare_envelope_and_coverage_on_the_test_excerpt() -> None:
     assert band.band == band_of(real[0].speed_mps)
     lo, hi = band.p10_envelope
     assert lo <= hi and out["covered"] == int(band.covered(real[0]))
+
+
+@pytest.mark.parametrize(("covered", "total"), [(27, 31), (15, 31), (1, 4), (0, 5), (5, 5)])
+def test_coverage_interval_is_clopper_pearson(covered: int, total: int) -> None:
+    # the exact interval from its beta-quantile form (Clopper & Pearson 1934), written
+    # out here rather than through scipy's binomtest, which the code uses
+    lo = 0.0 if covered == 0 else beta.ppf(0.025, covered, total - covered + 1)
+    hi = 1.0 if covered == total else beta.ppf(0.975, covered + 1, total - covered)
+    assert coverage_interval(covered, total) == pytest.approx((lo, hi), abs=1e-9)
+
+
+def test_coverage_interval_of_27_of_31_reaches_below_80_percent() -> None:
+    # 27 of 31 (87 %) is above 80 % as a count, not by its interval (docs/SIM_TO_REAL.md)
+    lo, hi = coverage_interval(27, 31)
+    assert lo < 0.80 < 27 / 31 < hi
+
+
+@pytest.mark.parametrize(("covered", "total"), [(3, 2), (-1, 4), (0, 0)])
+def test_coverage_interval_rejects_impossible_counts(covered: int, total: int) -> None:
+    with pytest.raises(ValueError, match="coverage_interval"):
+        coverage_interval(covered, total)
 
 
 def _p10_inside(report: Sim2RealReport) -> int:
@@ -77,6 +100,8 @@ def test_cli_sim2real_json(capsys: pytest.CaptureFixture[str]) -> None:
     assert code == 0
     out = json.loads(capsys.readouterr().out)
     assert out["model"] == "calibrated" and out["recordings"] == 1
+    lo, hi = out["coverage_ci95"]
+    assert 0.0 <= lo <= out["coverage_fraction"] <= hi <= 1.0 and hi - lo > 0.5
 
 
 @pytest.mark.parametrize(
