@@ -20,6 +20,7 @@ The JSON object is described in docs/CONTRACTS.md ("pednav evaluate")::
     {"env": "pednav/FootZupt-v0", "episodes": 100, "seed": 5000,
      "policies": [{"name": "paper", "mean_error": .., "ci95": [lo, hi],
                    "final_error_pct": .., "divergence_rate": ..,
+                   "divergence_ci95": [lo, hi],
                    "vs_paper": {"mean_diff": .., "p_value": ..},
                    "mean_error_non_diverged": .., "episode_errors": [.., ..],
                    "vs_tuned": {"mean_diff": .., "p_value": ..}}, ...]}
@@ -252,6 +253,15 @@ def paired_test(err: np.ndarray, base: np.ndarray) -> dict[str, float]:
     return {"mean_diff": float(diff.mean()), "p_value": p}
 
 
+def divergence_interval(diverged: np.ndarray) -> tuple[float, float]:
+    """The exact (Clopper–Pearson) 95 % interval of the divergence rate from
+    per-episode flags: where the rate lies for episodes of the same kind."""
+    ci = stats.binomtest(int(np.count_nonzero(diverged)), diverged.size).proportion_ci(
+        0.95, method="exact"
+    )
+    return float(ci.low), float(ci.high)
+
+
 def summarize(
     name: str,
     res: list[EpisodeResult],
@@ -259,10 +269,10 @@ def summarize(
     tuned: list[EpisodeResult] | None = None,
     paper_name: str = "paper",
 ) -> dict[str, Any]:
-    """Mean, 95 % CI (Student t), final error %, divergence rate, the mean over the
-    episodes that did not diverge, the per-episode errors (seed order) and paired
-    tests against the paper policy (``paper_name``: the action 0 it stands for)
-    and (when played) the tuned constant."""
+    """Mean, 95 % CI (Student t), final error %, divergence rate and its exact 95 %
+    interval, the mean over the episodes that did not diverge, the per-episode
+    errors (seed order) and paired tests against the paper policy (``paper_name``:
+    the action 0 it stands for) and (when played) the tuned constant."""
     err = np.array([r.mean_error for r in res])
     diverged = np.array([r.diverged for r in res])
     n = len(err)
@@ -287,6 +297,7 @@ def summarize(
         "ci95": [mean - half, mean + half],
         "final_error_pct": float(np.nanmean([r.final_error_pct for r in res])),
         "divergence_rate": float(diverged.mean()),
+        "divergence_ci95": [float(v) for v in divergence_interval(diverged)],
         "vs_paper": vs_paper,
         "mean_error_non_diverged": float(err[~diverged].mean()) if (~diverged).any() else None,
         "episode_errors": err.tolist(),

@@ -6,17 +6,29 @@ import time
 import gymnasium as gym
 import numpy as np
 import pytest
+from scipy.stats import beta
 from testdata import HALLWAY_DATA, REPLAY_DATA
 
 from agents.bench.timing import bench_native_vs_reference
 from agents.cli import main
-from agents.evaluate import evaluate, load_policy, run_episodes
+from agents.evaluate import divergence_interval, evaluate, load_policy, run_episodes
 from baselines import PaperPolicy
 from pednav_env.envs.foot_core import FootZuptConfig
 from pednav_env.gait.foot_route import RouteRandomization
 from pednav_env.sb3 import NativeVecEnv
 
 ENV_ID = "pednav/FootZupt-v0"
+
+
+@pytest.mark.parametrize(("diverged", "episodes"), [(148, 200), (17, 200), (0, 10), (10, 10)])
+def test_divergence_interval_is_clopper_pearson(diverged: int, episodes: int) -> None:
+    # the beta-quantile form of the exact interval, written out (the code uses binomtest)
+    flags = np.arange(episodes) < diverged
+    lo = 0.0 if diverged == 0 else beta.ppf(0.025, diverged, episodes - diverged + 1)
+    hi = 1.0 if diverged == episodes else beta.ppf(0.975, diverged + 1, episodes - diverged)
+    assert divergence_interval(flags) == pytest.approx((lo, hi), abs=1e-9)
+
+
 SHORT = {"config": FootZuptConfig(route=RouteRandomization(duration_s=(10.0, 15.0)))}
 
 
@@ -72,6 +84,7 @@ def test_evaluate_json_has_the_contract_keys_and_paired_stats(tmp_path):
             "ci95",
             "final_error_pct",
             "divergence_rate",
+            "divergence_ci95",
             "vs_paper",
             "mean_error_non_diverged",
             "episode_errors",
@@ -82,6 +95,8 @@ def test_evaluate_json_has_the_contract_keys_and_paired_stats(tmp_path):
         lo, hi = p["ci95"]
         assert lo <= p["mean_error"] <= hi
         assert 0.0 <= p["divergence_rate"] <= 1.0
+        lo, hi = p["divergence_ci95"]
+        assert 0.0 <= lo <= p["divergence_rate"] <= hi <= 1.0 and hi - lo > 0.3  # 3 episodes
     paper, learned = out["policies"]
     assert paper["vs_paper"] == {"mean_diff": 0.0, "p_value": None}
     assert learned["vs_paper"]["mean_diff"] == pytest.approx(
