@@ -141,11 +141,7 @@ def stride_distance(real: Sequence[WalkStats], sim: Sequence[WalkStats]) -> dict
     recorded and the simulated strides' quietness; a bin without simulated
     strides counts :data:`MISSING_BIN_DECADES` (the simulator has no stride
     there to compare)."""
-    rec, mod = stride_quietness_by_bin(real), stride_quietness_by_bin(sim)
-    return {
-        k: float(wasserstein_distance(rec[k], mod[k])) if k in mod else MISSING_BIN_DECADES
-        for k in stride_bins(real)
-    }
+    return binned_w1(stride_quietness_by_bin(real), stride_quietness_by_bin(sim), stride_bins(real))
 
 
 def swing_distance(real: Sequence[WalkStats], sim: Sequence[WalkStats]) -> dict[int, float]:
@@ -154,11 +150,21 @@ def swing_distance(real: Sequence[WalkStats], sim: Sequence[WalkStats]) -> dict[
     log10 swing |ω| median (:func:`pednav_env.calibration.compare.stride_swing_by_bin`);
     a bin without simulated strides counts :data:`MISSING_BIN_DECADES`, as in
     :func:`stride_distance`."""
-    rec, mod = stride_swing_by_bin(real), stride_swing_by_bin(sim)
+    return binned_w1(stride_swing_by_bin(real), stride_swing_by_bin(sim), stride_bins(real))
+
+
+def binned_w1(
+    recorded: Mapping[int, Array], simulated: Mapping[int, Array], bins: Sequence[int]
+) -> dict[int, float]:
+    """Per bin of ``bins`` holding recorded values, the W1 between the recorded and
+    the simulated values of that bin (per-bin arrays keyed by bin index);
+    :data:`MISSING_BIN_DECADES` where the simulator has none."""
     return {
-        k: float(wasserstein_distance(rec[k], mod[k])) if k in mod else MISSING_BIN_DECADES
-        for k in stride_bins(real)
-        if k in rec
+        k: float(wasserstein_distance(recorded[k], simulated[k]))
+        if k in simulated
+        else MISSING_BIN_DECADES
+        for k in bins
+        if k in recorded
     }
 
 

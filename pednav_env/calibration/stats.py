@@ -334,19 +334,16 @@ def merge_split_stances(
     ends = np.asarray(ends, dtype=np.int64)
     if starts.size < 2:
         return starts, ends
-    pos = None if truth_pos is None else np.asarray(truth_pos, dtype=float)[:, :2]
-    keep_start, keep_end = [0], []
-    for k in range(1, starts.size):
-        prev_end, start = int(ends[k - 1]), int(starts[k])
-        same = (start - prev_end) / rate_hz < MIN_SWING_S
-        if not same and pos is not None:
-            # NaN (no reference) compares False: not merged on distance
-            same = bool(np.linalg.norm(pos[start] - pos[max(prev_end - 1, 0)]) < MIN_SWING_M)
-        if not same:
-            keep_end.append(k - 1)
-            keep_start.append(k)
-    keep_end.append(starts.size - 1)
-    return starts[keep_start], ends[keep_end]
+    # joins[k]: run k + 1 joins run k
+    joins = (starts[1:] - ends[:-1]) / rate_hz < MIN_SWING_S
+    if truth_pos is not None:
+        pos = np.asarray(truth_pos, dtype=float)[:, :2]
+        moved = np.linalg.norm(pos[starts[1:]] - pos[np.maximum(ends[:-1] - 1, 0)], axis=1)
+        with np.errstate(invalid="ignore"):
+            joins |= moved < MIN_SWING_M  # NaN (no reference) compares False
+    first = np.concatenate(([True], ~joins))  # runs that start a merged run
+    last = np.concatenate((~joins, [True]))  # runs that end one
+    return starts[first], ends[last]
 
 
 def truth_velocity_stance(truth_pos: Array, rate_hz: float) -> Flags:
