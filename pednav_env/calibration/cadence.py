@@ -10,9 +10,11 @@ A **stride** runs from one footfall of the instrumented foot to its next:
   :func:`pednav_env.calibration.stats.walk_stats` cleans them (gaps and runs
   shorter than :data:`~pednav_env.calibration.stats.LABEL_MIN_RUN_S` closed and
   dropped), with two stance runs merged when the foot moves less than
-  :data:`~pednav_env.calibration.stats.MIN_SWING_M` horizontally or for less
-  than :data:`~pednav_env.calibration.stats.MIN_SWING_S` between them
-  (:func:`pednav_env.calibration.stats.merge_split_stances`, which
+  :data:`~pednav_env.calibration.stats.MIN_SWING_M` horizontally between them,
+  however short the gap (the gap's length,
+  :data:`~pednav_env.calibration.stats.MIN_SWING_S`, decides only where a
+  truth position is missing;
+  :func:`pednav_env.calibration.stats.merge_split_stances`, which
   ``walk_stats``' strides use too: PyShoe's labels also split a stance by gaps
   of 0.05–0.1 s in which the foot does not move; a real swing moves it 0.15 m
   or more).

@@ -30,9 +30,10 @@ trials it moved p50 by up to a decade).
 
 Strides without footprints start at the stance runs of the cleaned labels,
 two runs merged into one stance when the foot moves less than
-:data:`MIN_SWING_M` or for less than :data:`MIN_SWING_S` between them
-(:func:`merge_split_stances`): the labels also split stances by short gaps in
-which the foot stays put, which would make a short false stride. Stands are
+:data:`MIN_SWING_M` between them, or, without truth positions, when the gap
+between them is shorter than :data:`MIN_SWING_S` (:func:`merge_split_stances`):
+the labels also split stances by short gaps in which the foot stays put, which
+would make a short false stride. Stands are
 found before the merge, on the cleaned labels alone.
 
 Stance comes, in this order of preference, from labels stored with the walk
@@ -76,9 +77,11 @@ DETECTOR_STAND_LOG10 = 6.0
 LABEL_MIN_RUN_S = 0.05
 #: Per stride, the percentile of log10 SHOE reported as its quietness (%).
 STRIDE_QUIET_PERCENT = 5.0
-#: Two stance runs are one stance when the foot moves less than this (m) ...
+#: Two stance runs are one stance when the foot moves less than this (m)
+#: between them ...
 MIN_SWING_M = 0.05
-#: ... or for less than this (s) between them (:func:`merge_split_stances`).
+#: ... or, where no truth position tells, when the gap between them is shorter
+#: than this (s) (:func:`merge_split_stances`).
 MIN_SWING_S = 0.15
 
 
@@ -321,26 +324,27 @@ def merge_split_stances(
 
     PyShoe's VICON labels split some stances by gaps of 0.05–0.1 s in which the
     foot does not move (5 mm or less), which the label cleaning does not close; a
-    real swing moves the foot 0.15 m or more. A run joins the one before it when
-    the gap between them is shorter than :data:`MIN_SWING_S`, or when the foot's
-    horizontal truth position moves less than :data:`MIN_SWING_M` from the last
-    sample of the earlier run to the first of the later one.
+    real swing moves the foot 0.15 m or more. With ``truth_pos``, the foot's
+    movement alone decides: a run joins the one before it when the horizontal
+    truth position moves less than :data:`MIN_SWING_M` from the last sample of
+    the earlier run to the first of the later one, however short or long the gap
+    (a foot that moved 5 cm or more took a step).
 
     Without ``truth_pos`` (walks with labels or a detector only), or where either
-    of those two positions is missing (NaN), the time criterion alone decides: a
-    gap of :data:`MIN_SWING_S` or longer is a swing.
+    of those two positions is missing (NaN), the gap's length decides instead: a
+    gap shorter than :data:`MIN_SWING_S` is a split stance, a longer one a swing.
     """
     starts = np.asarray(starts, dtype=np.int64)
     ends = np.asarray(ends, dtype=np.int64)
     if starts.size < 2:
         return starts, ends
-    # joins[k]: run k + 1 joins run k
+    # joins[k]: run k + 1 joins run k; the gap's length where no movement is known
     joins = (starts[1:] - ends[:-1]) / rate_hz < MIN_SWING_S
     if truth_pos is not None:
         pos = np.asarray(truth_pos, dtype=float)[:, :2]
         moved = np.linalg.norm(pos[starts[1:]] - pos[np.maximum(ends[:-1] - 1, 0)], axis=1)
-        with np.errstate(invalid="ignore"):
-            joins |= moved < MIN_SWING_M  # NaN (no reference) compares False
+        known = np.isfinite(moved)
+        joins[known] = moved[known] < MIN_SWING_M
     first = np.concatenate(([True], ~joins))  # runs that start a merged run
     last = np.concatenate((~joins, [True]))  # runs that end one
     return starts[first], ends[last]

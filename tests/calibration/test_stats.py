@@ -153,7 +153,9 @@ def _short_swing_walk(samples: int, metres: float) -> WalkSamples:
     [
         (30, 0.06, False),  # 0.15 s, 6 cm: a real (short) swing, a stride of its own
         (30, 0.04, True),  # 4 cm: below MIN_SWING_M
-        (28, 0.06, True),  # 0.14 s: below MIN_SWING_S
+        (28, 0.06, False),  # 0.14 s, 6 cm: with truth positions the movement decides
+        (20, 0.06, False),  # 0.1 s, 6 cm: likewise
+        (60, 0.04, True),  # 0.3 s, 4 cm: a long gap without a step
     ],
 )
 def test_a_real_short_swing_is_not_merged(samples: int, metres: float, merged: bool) -> None:
@@ -197,6 +199,19 @@ def test_merge_split_stances_rules() -> None:
     pos[200, 0] = np.nan
     s, e = merge_split_stances(starts, ends, 100.0, pos)
     assert (s.tolist(), e.tolist()) == ([0, 100, 200], [70, 160, 260])
+
+
+def test_merge_split_stances_with_positions_the_movement_decides() -> None:
+    # a 0.1 s gap (shorter than MIN_SWING_S) in which the foot moves 6 cm: a step with
+    # truth positions, a split stance without them
+    starts, ends = np.array([0, 50]), np.array([40, 90])
+    pos = np.zeros((100, 3))
+    pos[40:50, 0] = np.linspace(0.0, 0.06, 10)
+    pos[50:, 0] = 0.06
+    s, e = merge_split_stances(starts, ends, 100.0, pos)
+    assert (s.tolist(), e.tolist()) == ([0, 50], [40, 90])
+    s, e = merge_split_stances(starts, ends, 100.0)
+    assert (s.tolist(), e.tolist()) == ([0], [90])
 
 
 def test_stride_quietness_is_the_quietest_five_percent() -> None:
