@@ -42,6 +42,7 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from agents.cli_distill import add_distill_command
 from agents.cli_fit_rule import add_fit_rule_command
@@ -53,7 +54,7 @@ from agents.cli_options import (
 )
 from agents.cli_recordings import add_recording_commands
 from agents.cli_tune import add_tune_command
-from agents.cli_types import positive_int
+from agents.cli_types import nonnegative_int, output_dir, positive_float, positive_int
 from pednav_env import __version__
 
 
@@ -65,7 +66,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     if args.runs is not None:
         kwargs["runs"] = args.runs
     if args.plots is not None:
-        kwargs["plot_dir"] = args.plots
+        kwargs["plot_dir"] = output_dir(args.plots, "--plots")
     with progress_bar(f"reproducing paper {args.paper}", None, wanted(args.json)):
         result = reproduce.run(args.paper, **kwargs)
     if args.json:
@@ -83,6 +84,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     env_kwargs = env_kwargs_from_args(args)
     backend = backend_from_args(args)
+    plot_dir = None if args.plot is None else output_dir(args.plot, "--plot")
     episodes = args.episodes
     if episodes is None:  # one episode per recording, else 100
         data_dir = env_kwargs.get("data_dir")
@@ -95,7 +97,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
             episodes,
             args.seed,
             env_kwargs,
-            args.plot,
+            plot_dir,
             backend=backend,
             on_episode=advance,
             lanes=args.lanes or MAX_LANES,
@@ -105,7 +107,13 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
+    from agents.policies import FAMILY_ENVS
     from agents.train import train, train_seeds
+
+    if args.filter is not None and args.env_id not in FAMILY_ENVS:
+        raise ValueError(f"--filter: {args.env_id} has no filter families")
+    if args.run_dir is not None:
+        output_dir(args.run_dir, "--run-dir")
 
     common = {
         "timesteps": args.timesteps,
@@ -158,6 +166,14 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser with a one-line usage error (no usage block): the same
+    ``PROG: error: …`` line and exit code 2 as :func:`main`'s ValueErrors."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
     """Shows each option's default, unless its help already says it or there is none."""
 
@@ -170,7 +186,7 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="pednav",
         description="Gait-aware pedestrian navigation: paper reproductions, environments, tuners.",
         formatter_class=_HelpFormatter,
@@ -179,9 +195,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(
         dest="command",
         required=True,
-        parser_class=lambda **kw: argparse.ArgumentParser(
-            **{"formatter_class": _HelpFormatter, **kw}
-        ),
+        parser_class=lambda **kw: _Parser(**{"formatter_class": _HelpFormatter, **kw}),
     )
 
     rep = sub.add_parser(
@@ -196,7 +210,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="Monte-Carlo runs per configuration (default: the paper's)",
     )
-    rep.add_argument("--seed", type=int, default=0, help="root random seed")
+    rep.add_argument("--seed", type=nonnegative_int, default=0, help="root random seed")
     rep.add_argument(
         "--json", action="store_true", help="print one JSON object (docs/CONTRACTS.md)"
     )
@@ -317,7 +331,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     be.add_argument(
         "--seconds",
-        type=float,
+        type=positive_float,
         default=None,
         help="minimum timed seconds per measurement (default 3)",
     )

@@ -4,20 +4,21 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
-from agents.cli_types import positive_int
+from agents.cli_types import nonnegative_int, output_dir, positive_int
 
 
 def run_distill(args: argparse.Namespace) -> int:
     from agents.distill import distill
+    from agents.evaluate import env_options
     from agents.policies import FAMILY_ENVS
     from pednav_env.envs.foot_filters import LEARNED_FAMILY
 
+    env_options(args.env_id)  # ValueError for an unknown env id
     family = (args.filter or LEARNED_FAMILY) if args.env_id in FAMILY_ENVS else None
     if args.filter is not None and family is None:
         raise ValueError(f"--filter: {args.env_id} has no filter families")
-    base = Path(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/distill")
+    base = output_dir(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/distill", "--run-dir")
     for seed in args.seeds:
         run_dir = base / f"seed{seed}" if len(args.seeds) > 1 else base
         distill(
@@ -56,7 +57,11 @@ def add_distill_command(sub: argparse._SubParsersAction) -> None:
         help="foot envs: the filter family (default shoe; its oracle table teaches)",
     )
     di.add_argument(
-        "--seeds", type=int, nargs="+", default=[0], help="training run seeds (one run each)"
+        "--seeds",
+        type=nonnegative_int,
+        nargs="+",
+        default=[0],
+        help="training run seeds (one run each)",
     )
     di.add_argument("--iterations", type=positive_int, default=6, help="DAgger iterations")
     di.add_argument(

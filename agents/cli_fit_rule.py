@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
-from agents.cli_types import positive_float, positive_int
+from agents.cli_types import nonnegative_int, output_dir, positive_float, positive_int
 
 OUT_NAME = "gait_rule.json"
 
@@ -17,9 +16,7 @@ def run_fit_rule(args: argparse.Namespace) -> int:
     from agents.gait_rule_real import cross_validate, fit, folds, load_fit_recordings
     from agents.progress import progress_bar, wanted
 
-    out_dir = Path(args.out)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise ValueError(f"--out {out_dir}: not a directory")
+    out_dir = output_dir(args.out, "--out")  # before the fit, not after it
     if args.folds == 1 or args.folds < 0:
         raise ValueError(f"--folds: 0 (no cross-validation) or at least 2, got {args.folds}")
     if args.simulated_episodes < 0:
@@ -83,7 +80,7 @@ def add_fit_rule_command(sub: argparse._SubParsersAction) -> None:
     fr.add_argument("--generations", type=positive_int, default=12, help="CMA-ES generations")
     fr.add_argument("--popsize", type=positive_int, default=10, help="candidates per generation")
     fr.add_argument("--sigma0", type=positive_float, default=0.3, help="CMA-ES initial step")
-    fr.add_argument("--seed", type=int, default=1, help="CMA-ES seed")
+    fr.add_argument("--seed", type=nonnegative_int, default=1, help="CMA-ES seed")
     fr.add_argument(
         "--simulated-episodes",
         type=int,

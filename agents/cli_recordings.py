@@ -9,7 +9,7 @@ import sys
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from agents.cli_types import positive_float, positive_int
+from agents.cli_types import nonnegative_int, output_dir, positive_float, positive_int
 
 if TYPE_CHECKING:
     from pednav_env.calibration.compare import SimModel
@@ -42,7 +42,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
         footprints=None if args.footprints == "none" else args.footprints,
     )
     if Path(args.recording).is_dir():
-        result = run_folder(args.recording, options, args.plot, args.out)
+        plot_dir = None if args.plot is None else output_dir(args.plot, "--plot")
+        out_dir = None if args.out is None else output_dir(args.out, "--out")
+        result = run_folder(args.recording, options, plot_dir, out_dir)
         print(json.dumps(result) if args.json else format_folder(result))
         return 1 if any("error" in r for r in result["recordings"]) else 0
     summary, rec = run(args.recording, options, args.plot, args.out)
@@ -117,8 +119,8 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
     model = _sim_model(args.model)
     if args.walks < 2:
         raise ValueError(f"--walks must be ≥ 2 (each band's spread), got {args.walks}")
-    if args.plot is not None and Path(args.plot).exists() and not Path(args.plot).is_dir():
-        raise ValueError(f"--plot {args.plot}: is a file; give a directory")
+    if args.plot is not None:
+        output_dir(args.plot, "--plot")
     paths = []
     for item in args.recordings:
         p = Path(item)
@@ -159,7 +161,7 @@ def _add_sim2real(sub: argparse._SubParsersAction) -> None:
         default=60,
         help="simulated walks per speed band, ≥ 2 (default 60)",
     )
-    s2r.add_argument("--seed", type=int, default=0, help="simulation seed (default 0)")
+    s2r.add_argument("--seed", type=nonnegative_int, default=0, help="simulation seed (default 0)")
     s2r.add_argument("--json", action="store_true", help="print one JSON object")
     s2r.add_argument("--plot", metavar="DIR", default=None, help="write histograms to DIR")
     s2r.set_defaults(func=_cmd_sim2real)
@@ -296,7 +298,7 @@ def add_recording_commands(sub: argparse._SubParsersAction) -> None:
         default=True,
         help="stand still for 1–5 s at the start of some legs (default on)",
     )
-    si.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    si.add_argument("--seed", type=nonnegative_int, default=0, help="random seed (default 0)")
     si.add_argument(
         "--model",
         default="calibrated",

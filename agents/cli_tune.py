@@ -14,7 +14,7 @@ from agents.cli_options import (
     backend_from_args,
     env_kwargs_from_args,
 )
-from agents.cli_types import positive_float, positive_int
+from agents.cli_types import nonnegative_int, output_dir, positive_float, positive_int
 
 
 def run_tune(args: argparse.Namespace) -> int:
@@ -45,6 +45,7 @@ def run_tune(args: argparse.Namespace) -> int:
     key = result_key(args.env_id, family)
     action_dim = gym.make(args.env_id, **env_kwargs).action_space.shape[0]
     run_dir = Path(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/tune_seed{args.seed}")
+    output_dir(run_dir, "--run-dir")  # before the search, not after it
     backend = backend_from_args(args)
     options = {
         "episodes": args.episodes,
@@ -116,7 +117,7 @@ def add_tune_command(sub: argparse._SubParsersAction) -> None:
     )
     tu.add_argument("--generations", type=positive_int, default=8, help="CMA-ES generations")
     tu.add_argument("--popsize", type=positive_int, default=8, help="candidates per generation")
-    tu.add_argument("--seed", type=int, default=1, help="CMA-ES seed")
+    tu.add_argument("--seed", type=nonnegative_int, default=1, help="CMA-ES seed")
     tu.add_argument(
         "--run-dir",
         default=None,
@@ -131,7 +132,7 @@ def add_tune_command(sub: argparse._SubParsersAction) -> None:
     )
     tu.add_argument(
         "--reevaluate",
-        type=int,
+        type=nonnegative_int,
         default=0,
         metavar="N",
         help="play the chosen action on N fresh training episodes and report that mean",

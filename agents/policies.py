@@ -125,7 +125,10 @@ def load_run(path: str | Path) -> Any:
     if not model_file.exists():
         raise ValueError(f"policy {str(path)!r}: no such model file ({model_file})")
     meta_file = model_file.parent / "meta.json"
-    meta = json.loads(meta_file.read_text()) if meta_file.exists() else {}
+    try:
+        meta = json.loads(meta_file.read_text()) if meta_file.exists() else {}
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"policy {str(path)!r}: {meta_file} is not valid JSON ({exc})") from None
     algo = meta.get("algo")
     classes = {"ppo": PPO, "sac": SAC}
     candidates = [classes[algo]] if algo in classes else [PPO, SAC]

@@ -24,6 +24,7 @@ footprints ``footprints``, ``footprint_mean_error_m``,
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -205,10 +206,13 @@ def check_policies(names: list[str], option: str = "--policies") -> None:
 
 
 def check_output_path(path: str | Path, option: str) -> Path:
-    """An output file whose directory exists (checked before the run, not after)."""
+    """An output file whose directory exists and is writable (checked before the run,
+    not after)."""
     path = Path(path)
     if not path.parent.is_dir():
         raise ValueError(f"{option} {path}: directory {path.parent} does not exist")
+    if not os.access(path.parent, os.W_OK):
+        raise ValueError(f"{option} {path}: directory {path.parent} not writable")
     if path.is_dir():
         raise ValueError(f"{option} {path}: is a directory; give a file name")
     return path

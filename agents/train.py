@@ -54,7 +54,14 @@ def load_hyperparams(algo: str, env_id: str, config_file: str | Path | None = No
     path = Path(config_file) if config_file else HYPERPARAMS_DIR / f"{algo}.yml"
     if not path.exists():
         raise ValueError(f"config file {str(path)!r} does not exist")
-    table = yaml.safe_load(path.read_text()) or {}
+    try:
+        table = yaml.safe_load(path.read_text()) or {}
+    except yaml.YAMLError as exc:
+        where = getattr(exc, "problem_mark", None)
+        line = f" at line {where.line + 1}" if where is not None else ""
+        raise ValueError(f"config file {str(path)!r}: not valid YAML{line}") from None
+    if not isinstance(table, dict):
+        raise ValueError(f"config file {str(path)!r}: expected a mapping ENV_ID: {{...}}")
     if env_id not in table:
         raise ValueError(f"{path} has no hyperparameters for {env_id!r}; it has {sorted(table)}")
     return dict(table[env_id])

@@ -30,6 +30,7 @@ The simulator model — IMU grade and stance dynamics — defaults to
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -208,6 +209,8 @@ def check_output_path(path: str | Path) -> Path:
         raise ValueError(f"{path}: is a directory; give a file name (e.g. {path / 'walk.csv'})")
     if not path.parent.is_dir():
         raise ValueError(f"{path}: directory {path.parent} does not exist")
+    if not os.access(path.parent, os.W_OK):
+        raise ValueError(f"{path}: directory {path.parent} not writable")
     return path
 
 

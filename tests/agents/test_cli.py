@@ -6,6 +6,7 @@ import io
 
 import numpy as np
 import pytest
+from testdata import DATA
 
 from agents.cli import build_parser, main
 from agents.evaluate import EpisodeResult
@@ -116,3 +117,116 @@ def test_plots_are_written_in_seconds(tmp_path):
     )
     assert [f.name for f in files] == ["error_over_time.png", "per_episode.png"]
     assert all(f.stat().st_size > 10_000 for f in files)
+
+
+def one_line_usage_error(capsys, argv: list[str], message: str) -> None:
+    """argparse's refusal: exit code 2, one stderr line naming the option, no usage block."""
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "usage:" not in err, err
+    assert message in err and "--help" in err, err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["evaluate", "pednav/MarkerTrack-v0", "--policy", "paper", "--episodes", "0"],
+            "--episodes: must be ≥ 1",
+        ),
+        (
+            ["evaluate", "pednav/MarkerTrack-v0", "--policy", "paper", "--episodes", "x"],
+            "--episodes: not an integer: 'x'",
+        ),
+        (
+            ["evaluate", "pednav/FootZupt-v0", "--policy", "paper", "--filter", "bogus"],
+            "--filter: invalid choice",
+        ),
+        (
+            ["evaluate", "pednav/FootZupt-v0", "--policy", "paper", "--speed", "0", "5"],
+            "--speed: must be a finite number > 0",
+        ),
+        (["reproduce", "003", "--seed", "-1"], "--seed: must be ≥ 0, got -1"),
+        (["simulate", "--out", "x.csv", "--seed", "-1"], "--seed: must be ≥ 0"),
+        (["simulate", "--out", "x.csv", "--rate", "0"], "--rate: must be a finite number > 0"),
+        (["simulate", "--out", "x.csv", "--duration", "-3"], "--duration: must be"),
+        (["sim2real", "x.mat", "--seed", "-1"], "--seed: must be ≥ 0"),
+        (["tune", "pednav/WaistStep-v0", "--seed", "-1"], "--seed: must be ≥ 0"),
+        (["tune", "pednav/WaistStep-v0", "--reevaluate", "-1"], "--reevaluate: must be ≥ 0"),
+        (["distill", "pednav/MarkerTrack-v0", "--seeds", "0", "-1"], "--seeds: must be ≥ 0"),
+        (["fit-rule", "x.mat", "--out", "o", "--seed", "-1"], "--seed: must be ≥ 0"),
+        (["bench", "foot", "--seconds", "-1"], "--seconds: must be a finite number > 0"),
+        (["run", "x.csv", "--rate", "0"], "--rate: must be a finite number > 0"),
+        (["evaluate"], "the following arguments are required"),
+    ],
+)
+def test_bad_options_are_one_line_errors(argv, message, capsys):
+    one_line_usage_error(capsys, argv, message)
+
+
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (
+            ["evaluate", "pednav/MarkerTrack-v0", "--policy", "paper", "--episodes", "1", "--plot"],
+            "--plot",
+        ),
+        (["reproduce", "003", "--plots"], "--plots"),
+        (["train", "pednav/WaistStep-v0", "--timesteps", "1", "--run-dir"], "--run-dir"),
+        (["tune", "pednav/WaistStep-v0", "--run-dir"], "--run-dir"),
+        (["distill", "pednav/MarkerTrack-v0", "--run-dir"], "--run-dir"),
+        (["fit-rule", "x.mat", "--out"], "--out"),
+        (["run", str(DATA / "replay"), "--plot"], "--plot"),
+        (["run", str(DATA / "replay"), "--out"], "--out"),
+        (["sim2real", str(DATA / "replay"), "--plot"], "--plot"),
+    ],
+)
+def test_output_directories_are_checked_before_the_run(argv, option, tmp_path, capsys, monkeypatch):
+    """An output directory in the way of a file, under a file or not writable is a one-line
+    error naming its option, before any work (not a traceback after it)."""
+    blocker = tmp_path / "afile"
+    blocker.write_text("")
+    for target, message in (
+        (blocker, "is a file; give a directory"),
+        (blocker / "sub", "cannot create the directory"),
+    ):
+        assert main([*argv, str(target)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"pednav: error: {option} {target}: {message}"), err
+        assert err.count("\n") == 1, err
+    monkeypatch.setattr("agents.cli_types.os.access", lambda *_: False)
+    assert main([*argv, str(tmp_path / "new")]) == 2
+    assert (
+        capsys.readouterr().err
+        == f"pednav: error: {option} {tmp_path / 'new'}: directory not writable\n"
+    )
+
+
+def test_unreadable_run_files_name_the_file(tmp_path, capsys):
+    """A hyperparameter file that is not YAML, a run whose meta.json is not JSON, an
+    unknown env id for distill and --filter on an env without families: one line each."""
+    bad = tmp_path / "bad.yml"
+    bad.write_text("x: [1, 2\n")
+    argv = ["train", "pednav/WaistStep-v0", "--timesteps", "1", "--config", str(bad)]
+    assert main([*argv, "--run-dir", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert err == f"pednav: error: config file {str(bad)!r}: not valid YAML at line 2\n"
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "model.zip").write_bytes(b"")
+    (run / "meta.json").write_text("{oops")
+    assert main(["evaluate", "pednav/MarkerTrack-v0", "--policy", str(run), "--episodes", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(
+        f"pednav: error: policy {str(run)!r}: {run / 'meta.json'} is not valid JSON"
+    )
+    assert err.count("\n") == 1
+    assert main(["distill", "bogus", "--run-dir", str(tmp_path / "d")]) == 2
+    assert capsys.readouterr().err.startswith("pednav: error: unknown environment 'bogus'; known:")
+    assert main(["train", "pednav/WaistStep-v0", "--filter", "shoe"]) == 2
+    assert (
+        capsys.readouterr().err
+        == "pednav: error: --filter: pednav/WaistStep-v0 has no filter families\n"
+    )
