@@ -55,6 +55,11 @@ def short_name(name: str, width: int = NAME_WIDTH) -> str:
     return f"…/{tail}" if tail else "…" + name[-(width - 1) :]
 
 
+#: Between the table's columns: two spaces, so that multi-word headers ("95 % CI",
+#: "not diverged (m)") read as separate columns.
+COLUMN_GAP = "  "
+
+
 def format_table(result: dict[str, Any]) -> str:
     """Plain-text table of an evaluation result (the JSON object of ``evaluate``)."""
     env_id = result["env"]
@@ -72,7 +77,7 @@ def format_table(result: dict[str, Any]) -> str:
     with_tuned = any(p.get("vs_tuned") for p in result["policies"])
     if with_tuned:
         cols += [(f"{'Δ vs tuned':>10}", None), (f"{'p paired':>8}", None)]
-    head = " ".join(c for c, kind in cols if show_pct or kind != "pct")
+    head = COLUMN_GAP.join(c for c, kind in cols if show_pct or kind != "pct")
     families = list(dict.fromkeys(p["filter"] for p in result["policies"] if "filter" in p))
     pairing = "each filter family's action 0" if families else "paper"
     lines = [
@@ -148,7 +153,7 @@ def _rows(entries: list[dict[str, Any]], show_pct: bool, with_tuned: bool) -> li
             tdiff = "—" if p["name"] == "tuned" or not vt else f"{vt['mean_diff']:+.3f}"
             tp = vt.get("p_value")
             row += [f"{tdiff:>10}", f"{'—' if tp is None else f'{tp:.2g}':>8}"]
-        lines.append(" ".join(row))
+        lines.append(COLUMN_GAP.join(row))
     return lines
 
 
