@@ -277,7 +277,12 @@ def add_recording_commands(sub: argparse._SubParsersAction) -> None:
         help="one gait class at its own speeds, instead of --speed",
     )
     si.add_argument(
-        "--duration", metavar="S", type=positive_float, default=60.0, help="s, 5…7200 (default 60)"
+        "--duration",
+        metavar="S",
+        type=positive_float,
+        default=60.0,
+        help="s, 5…7200 (default 60); the walk ends with the last stride that fits, so it can "
+        "be up to a stride shorter (the message says the length written)",
     )
     si.add_argument(
         "--rate",
