@@ -7,7 +7,8 @@
 Per recorded stride (:func:`pednav_env.calibration.cadence.recorded_strides`: the
 23 PyShoe development trials from their cleaned VICON stance labels and VICON
 positions, the 8 hallway walks from their footprints; walking strides only,
-0.1–2 m/s): the cycle (footfall to footfall, s) and the stride speed (m/s). Printed:
+0.1–2 m/s; strides overlapping a truth glitch left out and listed): the cycle
+(footfall to footfall, s) and the stride speed (m/s). Printed:
 
 - per recording, its group (PyShoe session before / after 11:35, hallway walker),
   strides, median stride speed, length and cycle (10–90 %), the cycle of the
@@ -82,6 +83,7 @@ def recording_rows(walks: list[RecordedStrides]) -> list[dict]:
                 "cycle_p10_p90_s": [round(float(np.percentile(t, q)), 3) for q in (10, 90)],
                 "law_cycle_s": round(law_cycle(v), 3),
                 "ratio_to_law": round(float(np.median(t)) / law_cycle(v), 3),
+                "strides_left_out_truth_glitch": int(w.glitch_left_out_s.shape[0]),
             }
         )
     return rows
@@ -189,6 +191,10 @@ def main() -> None:
             f"| {r['length_m']:.2f} | {r['cycle_s']:.2f} ({lo:.2f}–{hi:.2f}) "
             f"| {r['law_cycle_s']:.2f} | {r['ratio_to_law']:.2f} |"
         )
+    for w in walks:
+        if w.glitch_left_out_s.size:
+            spans = ", ".join(f"{a:.2f}–{b:.2f} s" for a, b in w.glitch_left_out_s)
+            print(f"left out for a truth glitch: {w.name} {spans}")
     bins = bin_rows(walks)
     print("\n| group | stride speed (m/s) | strides (recordings) | cycle (s) | law's cycle (s) |")
     print("|---|---|---|---|---|")
@@ -222,6 +228,7 @@ def main() -> None:
                 "start_s": np.round(w.start_s, 3).tolist(),
                 "cycle_s": np.round(w.cycle_s, 3).tolist(),
                 "speed_mps": np.round(w.speed_mps, 3).tolist(),
+                "truth_glitch_strides_s": np.round(w.glitch_left_out_s, 3).tolist(),
             }
             for w in walks
         }

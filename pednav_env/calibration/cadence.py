@@ -10,17 +10,21 @@ A **stride** runs from one footfall of the instrumented foot to its next:
   :func:`pednav_env.calibration.stats.walk_stats` cleans them (gaps and runs
   shorter than :data:`~pednav_env.calibration.stats.LABEL_MIN_RUN_S` closed and
   dropped), with two stance runs merged when the foot moves less than
-  :data:`~pednav_env.calibration.stats.MIN_SWING_M` horizontally between them,
+  :data:`~pednav_env.calibration.strides.MIN_SWING_M` horizontally between them,
   however short the gap (the gap's length,
-  :data:`~pednav_env.calibration.stats.MIN_SWING_S`, decides only where a
-  truth position is missing;
-  :func:`pednav_env.calibration.stats.merge_split_stances`, which
-  ``walk_stats``' strides use too: PyShoe's labels also split a stance by gaps
-  of 0.05–0.1 s in which the foot does not move; a real swing moves it 0.15 m
-  or more).
+  :data:`~pednav_env.calibration.strides.MIN_SWING_S`, decides only where a
+  truth position is missing: PyShoe's labels also split a stance by gaps of
+  0.05–0.1 s in which the foot does not move; a real swing moves it 0.15 m or
+  more), and a run starting less than
+  :data:`~pednav_env.calibration.strides.MIN_STRIDE_S` after the run before it
+  joined to it (no human stride is shorter;
+  :func:`pednav_env.calibration.strides.stride_stances`, which ``walk_stats``'
+  strides use too).
 
 A stride is kept when it does not overlap a stand (stance ≥
-:data:`~pednav_env.calibration.stats.STAND_MIN_S`), lasts at most
+:data:`~pednav_env.calibration.stats.STAND_MIN_S`) or a truth glitch (a frozen
+truth position then a jump, :func:`pednav_env.calibration.strides.truth_glitches`;
+these are counted in ``RecordedStrides.glitch_left_out_s``), lasts at most
 :data:`MAX_CYCLE_S` and its speed (footfall-to-footfall horizontal distance over
 its duration, the speed :func:`pednav_env.gait.speed_route.speed_route` gives its
 strides) lies in [:data:`MIN_SPEED_MPS`, :data:`MAX_WALK_SPEED_MPS`): below it
@@ -37,7 +41,7 @@ recording's median log10(f / (a + b·v)).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,9 +52,9 @@ from pednav_env.calibration.stats import (
     WalkSamples,
     clean_labels,
     long_runs,
-    merge_split_stances,
     runs,
 )
+from pednav_env.calibration.strides import overlaps_glitch, stride_stances, truth_glitches
 
 Array = NDArray[np.float64]
 
@@ -64,12 +68,14 @@ MAX_WALK_SPEED_MPS = 2.0
 
 @dataclass(frozen=True)
 class RecordedStrides:
-    """One walk's kept strides: start (s), cycle (s) and speed (m/s)."""
+    """One walk's kept strides: start (s), cycle (s) and speed (m/s); and the
+    (start, end) times (s) of the strides left out for a truth glitch, one row each."""
 
     name: str
     start_s: Array
     cycle_s: Array
     speed_mps: Array
+    glitch_left_out_s: Array = field(default_factory=lambda: np.zeros((0, 2)))
 
     @property
     def frequency_hz(self) -> Array:
@@ -109,7 +115,7 @@ def footfalls(samples: WalkSamples) -> tuple[NDArray[np.int64], Array, NDArray[n
     clean = clean_labels(np.asarray(s.stance, dtype=bool), max(1, round(LABEL_MIN_RUN_S * rate)))
     stand = long_runs(clean, max(1, round(STAND_MIN_S * rate)))
     pos = np.asarray(s.truth_pos, dtype=float)[:, :2]
-    idx, _ = merge_split_stances(*runs(clean), rate, pos)
+    idx, _ = stride_stances(*runs(clean), rate, pos)
     return idx, pos[idx], stand
 
 
@@ -117,17 +123,24 @@ def recorded_strides(samples: WalkSamples) -> RecordedStrides:
     """The walk's kept strides (module docstring)."""
     rate = float(samples.rate_hz)
     idx, points, stand = footfalls(samples)
-    rows = []
+    glitches = np.zeros((0, 2), dtype=np.int64)
+    if samples.truth_pos is not None:
+        glitches = truth_glitches(samples.truth_pos, rate)
+    rows, left_out = [], []
     for k in range(idx.size - 1):
         a, b = int(idx[k]), int(idx[k + 1])
         cycle = (b - a) / rate
         if b <= a or stand[a:b].any() or cycle > MAX_CYCLE_S:
             continue
+        if glitches.size and overlaps_glitch(np.array([a]), np.array([b]), glitches)[0]:
+            left_out.append((a / rate, b / rate))
+            continue
         speed = float(np.linalg.norm(points[k + 1] - points[k])) / cycle
         if np.isfinite(speed) and MIN_SPEED_MPS <= speed < MAX_WALK_SPEED_MPS:
             rows.append((a / rate, cycle, speed))
     cols = np.array(rows, dtype=float).reshape(-1, 3).T
-    return RecordedStrides(samples.name, cols[0], cols[1], cols[2])
+    left = np.array(left_out, dtype=float).reshape(-1, 2)
+    return RecordedStrides(samples.name, cols[0], cols[1], cols[2], glitch_left_out_s=left)
 
 
 def fit_cadence_law(walks: Sequence[RecordedStrides]) -> CadenceLaw:

@@ -29,12 +29,13 @@ one-sample flicker would otherwise stay in the walking part (on the slow
 trials it moved p50 by up to a decade).
 
 Strides without footprints start at the stance runs of the cleaned labels,
-two runs merged into one stance when the foot moves less than
-:data:`MIN_SWING_M` between them, or, without truth positions, when the gap
-between them is shorter than :data:`MIN_SWING_S` (:func:`merge_split_stances`):
-the labels also split stances by short gaps in which the foot stays put, which
-would make a short false stride. Stands are
-found before the merge, on the cleaned labels alone.
+split stances merged and runs closer than a minimum stride joined
+(:func:`pednav_env.calibration.strides.stride_stances`): the labels also split
+stances by short gaps in which the foot stays put, which would make a short
+false stride. Stands are found before the merge, on the cleaned labels alone.
+With truth positions, strides overlapping a truth glitch (a frozen position
+then a jump; :func:`pednav_env.calibration.strides.truth_glitches`) are left
+out of the per-stride arrays and counted (``StrideStats.glitch_left_out_s``).
 
 Stance comes, in this order of preference, from labels stored with the walk
 (PyShoe's ``zv_vicon_opt``, the simulator's truth), from the truth velocity
@@ -46,7 +47,7 @@ records which (``stance_source``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import StrEnum
 from functools import cached_property
 from typing import Any
@@ -54,6 +55,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from pednav_env.calibration.strides import overlaps_glitch, stride_stances, truth_glitches
 from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.nav.detectors import ShoeDetectorConfig, shoe_statistic
 
@@ -77,12 +79,6 @@ DETECTOR_STAND_LOG10 = 6.0
 LABEL_MIN_RUN_S = 0.05
 #: Per stride, the percentile of log10 SHOE reported as its quietness (%).
 STRIDE_QUIET_PERCENT = 5.0
-#: Two stance runs are one stance when the foot moves less than this (m)
-#: between them ...
-MIN_SWING_M = 0.05
-#: ... or, where no truth position tells, when the gap between them is shorter
-#: than this (s) (:func:`merge_split_stances`).
-MIN_SWING_S = 0.15
 
 
 class StanceSource(StrEnum):
@@ -166,12 +162,15 @@ class StrideStats:
     """Per-stride arrays, one entry per stride (strides overlapping a stand dropped).
 
     A stride runs from one footprint to the next or, without footprints, from one
-    stance start to the next, the stance runs cleaned and split stances merged
-    (:func:`merge_split_stances`). ``speed_mps`` is NaN without truth or
-    footprints (the stride's path over its duration); ``stance_s`` is the first
-    stance run starting in the stride (a merged run with its gap); the medians
-    are over the stride's stance and swing samples (NaN if there are none);
-    ``log_shoe_p5`` is its quietest 5 %.
+    stance start to the next, the stance runs cleaned, split stances merged and
+    runs closer than a minimum stride joined
+    (:func:`pednav_env.calibration.strides.stride_stances`). ``speed_mps`` is NaN
+    without truth or footprints (the stride's path over its duration);
+    ``stance_s`` is the first stance run starting in the stride (a merged run
+    with its gaps); the medians are over the stride's stance and swing samples
+    (NaN if there are none); ``log_shoe_p5`` is its quietest 5 %. Strides
+    overlapping a truth glitch are not in the arrays: ``glitch_left_out_s`` holds
+    their (start, end) times (s), one row each.
     """
 
     start_s: Array
@@ -186,6 +185,10 @@ class StrideStats:
     #: finite samples): the SHOE threshold log10 γ must exceed it for 5 % of the
     #: stride to be detected as stance; it needs no labels.
     log_shoe_p5: Array
+    #: (K, 2) start and end (s) of the strides left out for a truth glitch
+    #: (:func:`pednav_env.calibration.strides.truth_glitches`; strides through a
+    #: stand are dropped before and not counted here).
+    glitch_left_out_s: Array = field(default_factory=lambda: np.zeros((0, 2)))
 
     @property
     def count(self) -> int:
@@ -264,6 +267,8 @@ class WalkStats:
             "quiet_fraction": round(self.quiet_fraction, 4),
             "quiet_s_median": med(self.quiet_runs_s),
             "strides": st.count,
+            "strides_left_out_truth_glitch": int(st.glitch_left_out_s.shape[0]),
+            "truth_glitch_strides_s": np.round(st.glitch_left_out_s, 3).tolist(),
             "stride_speed_median_mps": med(st.speed_mps),
             "stance_s_median": med(st.stance_s),
             "stance_gyro_median_rad_s": med(st.stance_gyro_median),
@@ -311,43 +316,6 @@ def clean_labels(flags: Flags, min_samples: int) -> Flags:
         if s - e < min_samples:
             out[e:s] = True
     return long_runs(out, min_samples)
-
-
-def merge_split_stances(
-    starts: NDArray[np.int64],
-    ends: NDArray[np.int64],
-    rate_hz: float,
-    truth_pos: Array | None = None,
-) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Stance runs (``starts``, ``ends`` exclusive, as :func:`runs` gives them) with
-    split stances merged into one run from the first start to the last end.
-
-    PyShoe's VICON labels split some stances by gaps of 0.05–0.1 s in which the
-    foot does not move (5 mm or less), which the label cleaning does not close; a
-    real swing moves the foot 0.15 m or more. With ``truth_pos``, the foot's
-    movement alone decides: a run joins the one before it when the horizontal
-    truth position moves less than :data:`MIN_SWING_M` from the last sample of
-    the earlier run to the first of the later one, however short or long the gap
-    (a foot that moved 5 cm or more took a step).
-
-    Without ``truth_pos`` (walks with labels or a detector only), or where either
-    of those two positions is missing (NaN), the gap's length decides instead: a
-    gap shorter than :data:`MIN_SWING_S` is a split stance, a longer one a swing.
-    """
-    starts = np.asarray(starts, dtype=np.int64)
-    ends = np.asarray(ends, dtype=np.int64)
-    if starts.size < 2:
-        return starts, ends
-    # joins[k]: run k + 1 joins run k; the gap's length where no movement is known
-    joins = (starts[1:] - ends[:-1]) / rate_hz < MIN_SWING_S
-    if truth_pos is not None:
-        pos = np.asarray(truth_pos, dtype=float)[:, :2]
-        moved = np.linalg.norm(pos[starts[1:]] - pos[np.maximum(ends[:-1] - 1, 0)], axis=1)
-        known = np.isfinite(moved)
-        joins[known] = moved[known] < MIN_SWING_M
-    first = np.concatenate(([True], ~joins))  # runs that start a merged run
-    last = np.concatenate((~joins, [True]))  # runs that end one
-    return starts[first], ends[last]
 
 
 def truth_velocity_stance(truth_pos: Array, rate_hz: float) -> Flags:
@@ -441,8 +409,9 @@ def _stride_stats(
     s: WalkSamples, stance: Flags, stand: Flags, log_t: Array, rate: float
 ) -> StrideStats:
     """Per-stride statistics; strides from footprints, or from the starts of the
-    clean stance runs with split stances merged (:func:`merge_split_stances`; the
-    merged run, its gap included, is the stride's stance)."""
+    clean stance runs as :func:`pednav_env.calibration.strides.stride_stances`
+    joins them (a merged run, its gaps included, is the stride's stance); with
+    truth positions, strides overlapping a truth glitch left out and recorded."""
     n = stance.size
     clean = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
     starts, ends = runs(clean)
@@ -450,7 +419,7 @@ def _stride_stats(
         bounds = np.asarray(s.footfall_index, dtype=np.int64)
         points = np.asarray(s.footprints_m, dtype=float)
     else:
-        starts, ends = merge_split_stances(starts, ends, rate, s.truth_pos)
+        starts, ends = stride_stances(starts, ends, rate, s.truth_pos)
         for a, b in zip(starts, ends, strict=True):
             clean[a:b] = True
         bounds = starts
@@ -459,10 +428,16 @@ def _stride_stats(
             points = np.asarray(s.truth_pos, dtype=float)[bounds, :2]
     gyro = np.linalg.norm(s.omega_b, axis=1)
     accel_dev = np.abs(np.linalg.norm(s.f_b, axis=1) - s.g)
-    rows = []
+    glitches = np.zeros((0, 2), dtype=np.int64)
+    if s.truth_pos is not None:
+        glitches = truth_glitches(s.truth_pos, rate)
+    rows, left_out = [], []
     for k in range(bounds.size - 1):
         a, b = int(bounds[k]), int(bounds[k + 1])
         if b <= a or stand[a:b].any() or b > n:
+            continue
+        if glitches.size and overlaps_glitch(np.array([a]), np.array([b]), glitches)[0]:
+            left_out.append((a / rate, b / rate))
             continue
         speed = float("nan")
         if points is not None:
@@ -487,4 +462,5 @@ def _stride_stats(
             )
         )
     cols = np.array(rows, dtype=float).reshape(-1, 9).T
-    return StrideStats(*cols)
+    left = np.array(left_out, dtype=float).reshape(-1, 2)
+    return StrideStats(*cols, glitch_left_out_s=left)

@@ -18,9 +18,10 @@ from pednav_env.calibration.stats import (
     WalkSamples,
     clean_labels,
     log10_shoe,
-    merge_split_stances,
+    runs,
     walk_stats,
 )
+from pednav_env.calibration.strides import merge_split_stances
 from pednav_env.constants import STANDARD_GRAVITY
 
 RATE = 200.0
@@ -135,13 +136,18 @@ def test_a_stance_split_without_movement_is_one_stride() -> None:
     assert_hand_walk_strides(st)
 
 
+#: Stances B and C of the short-swing walk (0.35 s): B → C lasts 0.45–0.65 s, longer
+#: than the minimum stride, so only the split-stance rule can join them.
+SHORT = 70
+
+
 def _short_swing_walk(samples: int, metres: float) -> WalkSamples:
     """Stance A, 1 m swing, stance B, a short swing of ``samples`` moving ``metres``,
     stance C, 1 m swing, stance D, 1 m swing, stance E into a stand."""
     phases = [(STAND, W_STAND, True, 0.0), (SWING, W_SWING, False, 1.0)]
     phases += [(STANCE, W_STANCE, True, 0.0), (SWING, W_SWING, False, 1.0)]
-    phases += [(40, W_STANCE, True, 0.0), (samples, W_SWING, False, metres)]
-    phases += [(40, W_STANCE, True, 0.0), (SWING, W_SWING, False, 1.0)]
+    phases += [(SHORT, W_STANCE, True, 0.0), (samples, W_SWING, False, metres)]
+    phases += [(SHORT, W_STANCE, True, 0.0), (SWING, W_SWING, False, 1.0)]
     phases += [(STANCE, W_STANCE, True, 0.0), (SWING, W_SWING, False, 1.0)]
     phases.append((STANCE + STAND, W_STAND, True, 0.0))
     omega_b, f_b, stance, pos = _phase_walk(phases)
@@ -161,24 +167,29 @@ def _short_swing_walk(samples: int, metres: float) -> WalkSamples:
 def test_a_real_short_swing_is_not_merged(samples: int, metres: float, merged: bool) -> None:
     st = walk_stats(_short_swing_walk(samples, metres)).strides
     if merged:  # A → B, B → D (B and C one stance), D → E
-        want = [SWING + STANCE, 40 + samples + 40 + SWING, SWING + STANCE]
-        stance = [STANCE, 40 + samples + 40, STANCE]
+        want = [SWING + STANCE, SHORT + samples + SHORT + SWING, SWING + STANCE]
+        stance = [STANCE, SHORT + samples + SHORT, STANCE]
     else:  # A → B, B → C, C → D, D → E
-        want = [SWING + STANCE, 40 + samples, 40 + SWING, SWING + STANCE]
-        stance = [STANCE, 40, 40, STANCE]
+        want = [SWING + STANCE, SHORT + samples, SHORT + SWING, SWING + STANCE]
+        stance = [STANCE, SHORT, SHORT, STANCE]
     assert st.duration_s == pytest.approx(np.array(want) / RATE)
     assert st.stance_s == pytest.approx(np.array(stance) / RATE)
     if not merged:
-        assert st.speed_mps[1] == pytest.approx(metres / ((40 + samples) / RATE))
+        assert st.speed_mps[1] == pytest.approx(metres / ((SHORT + samples) / RATE))
 
 
 def test_without_truth_positions_only_the_gap_length_merges() -> None:
-    # labels alone: a 0.08 s split is merged, a 0.2 s one is a stride of its own
-    # (with truth positions the still foot would merge it)
-    for gap, strides in ((16, STRIDES - 1), (40, STRIDES)):
+    # labels alone: the split-stance rule merges a 0.08 s split, not a 0.2 s one (with
+    # truth positions the still foot merges both); the 0.2 s split's second part then
+    # starts 0.3 s after the first, less than a minimum stride, and joins it
+    for gap, split_runs in ((16, 0), (40, 1)):
         omega_b, f_b, stance, pos = _split_second_stance(gap)
+        starts, ends = runs(clean_labels(stance, 10))
+        merged, _ = merge_split_stances(starts, ends, RATE)
+        assert merged.size == starts.size - 1 + split_runs
+        assert merge_split_stances(starts, ends, RATE, pos)[0].size == starts.size - 1
         labels_only = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=stance)).strides
-        assert labels_only.count == strides
+        assert labels_only.count == STRIDES - 1
         with_truth = walk_stats(WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos))
         assert with_truth.strides.count == STRIDES - 1
 
