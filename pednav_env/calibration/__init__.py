@@ -3,6 +3,9 @@
 - :mod:`pednav_env.calibration.stats` — statistics of a walk (label-free
   quietness measure from the SHOE statistic, the quiet phase, speeds,
   per-stride stance and swing signal levels);
+- :mod:`pednav_env.calibration.strides` — stride segmentation without
+  footprints (split stances, the minimum stride) and the truth glitches that
+  leave strides out;
 - :mod:`pednav_env.calibration.sources` — walks from recordings (hallway
   footprint walks included) and simulations, and simulated walks as
   recordings;

@@ -12,13 +12,14 @@ footprints the footfalls are the starts of the cleaned stance runs
    positions two runs are one stance when the foot moves less than
    :data:`MIN_SWING_M` between them; without them a gap shorter than
    :data:`MIN_SWING_S`.
-2. **Minimum stride** (:func:`merge_short_strides`): no human stride is shorter
-   than :data:`MIN_STRIDE_S`. Even at top sprinting speed runners reposition the
-   limb in about the same swing time whatever their speed (Weyand et al. 2000, J
-   Appl Physiol 89:1991–1999), and elite 100 m sprinters' step frequency is about
-   4.5–5 steps/s (Salo et al. 2011, Med Sci Sports Exerc 43:1055–1062): a stride of
-   two steps lasts 0.4 s or more. A run that starts sooner after the run before it
-   (e.g. a landing that slides 6 cm and settles) joins that run.
+2. **Minimum stride** (:func:`merge_short_strides`): no human stride (two steps)
+   is shorter than :data:`MIN_STRIDE_S`: sprinters' step rate peaks near 4.5–5
+   steps/s, a stride of 0.4–0.44 s (Weyand et al. 2000, J Appl Physiol
+   89:1991–1999: top speed comes from ground force, not faster leg repositioning;
+   Salo et al. 2011, Med Sci Sports Exerc 43:1055–1062: elite 100 m sprinters' step
+   frequency and length; the figure is not checked against their tables, see
+   docs/SIM_TO_REAL.md). A run that starts sooner after the run before it (e.g. a
+   landing that slides 6 cm and settles) joins that run.
 
 Where truth positions exist, the strides they cannot measure are found too
 (:func:`truth_glitches`, :func:`overlaps_glitch`): a horizontal step between two
