@@ -67,6 +67,13 @@ measures the distance's coverage term on N other simulated walks per band
 the checks are not affected (they measure coverage with ``pednav sim2real``'s own
 envelope). Both are stored in ``settings``; ``--recheck`` reads ``swing_term`` from
 there. Candidate v7 of docs/SIM_TO_REAL.md used both.
+
+``--gait-priors`` narrows the box of the gait timing to ranges from published gait
+studies (:data:`pednav_env.calibration.parameters.GAIT_PRIORS`: foot flat at 1 m/s
+0.15–0.43 of the cycle, its change per unit ln speed −0.15–0, each heel phase
+0.12–0.20; Perry & Burnfield 2010, Levangie & Norkin, Kirtley et al. 1985);
+a warm start outside is clipped to it. Stored in ``settings`` (``gait_priors``).
+Candidate v8 of docs/SIM_TO_REAL.md.
 """
 
 from __future__ import annotations
@@ -94,7 +101,14 @@ from pednav_env.calibration.compare import (
 )
 from pednav_env.calibration.fit import fit, groups
 from pednav_env.calibration.objective import GRADE, band_distance, by_band, swing_distance
-from pednav_env.calibration.parameters import NAMES, PITCH_KNOTS, START, SWING_SPEED, randomization
+from pednav_env.calibration.parameters import (
+    GAIT_PRIORS,
+    NAMES,
+    PITCH_KNOTS,
+    START,
+    SWING_SPEED,
+    randomization,
+)
 from pednav_env.calibration.sources import load_walk
 from pednav_env.calibration.stats import WalkStats, walk_stats
 
@@ -213,6 +227,7 @@ def run_part(
         knots,
         args.swing_term,
         args.coverage_walks,
+        args.gait_priors,
     )
     out = {
         "train": sorted(s.name for s in train),
@@ -319,6 +334,14 @@ def main() -> None:
         help="measure the distance's coverage term on N other simulated walks per band "
         "(seeds disjoint from the W1 walks'); 0: on the W1 walks (default)",
     )
+    ap.add_argument(
+        "--gait-priors",
+        action="store_true",
+        help="narrow the gait timing's box to published ranges (GAIT_PRIORS: foot flat at "
+        "1 m/s 0.15-0.43 of the cycle, its slope per ln speed -0.15-0, each heel phase "
+        "0.12-0.20; Perry & Burnfield 2010, Levangie & Norkin, Kirtley et al. 1985); "
+        "a warm start outside is clipped",
+    )
     ap.add_argument("--merge", nargs="+", metavar="JSON", help="join the outputs of parts")
     ap.add_argument(
         "--recheck",
@@ -368,6 +391,8 @@ def main() -> None:
             "swing_term": args.swing_term,
             "coverage_walks": args.coverage_walks,
         }
+        if args.gait_priors:  # absent without it: the shipped fit's settings unchanged
+            result["settings"]["gait_priors"] = {k: list(v) for k, v in GAIT_PRIORS.items()}
         for part in args.parts:
             result["parts"][part] = run_part(part, stats, args, strides)
             if args.out:

@@ -141,6 +141,7 @@ def fit(
     knots: bool = False,
     swing: bool = False,
     coverage_walks: int = 0,
+    priors: bool = False,
 ) -> FitResult:
     """:func:`~pednav_env.calibration.objective.distance` to ``real`` minimised by
     :func:`minimize_in_box` from ``x0`` (default
@@ -149,11 +150,13 @@ def fit(
     and ``knots``, the last value :data:`~pednav_env.calibration.parameters.PITCH_KNOTS`,
     as in :func:`~pednav_env.calibration.parameters.randomization`; ``swing`` and
     ``coverage_walks`` as in :func:`~pednav_env.calibration.objective.distance`): the
-    better of the start and the search's best."""
+    better of the start and the search's best. ``priors`` narrows the box of the
+    gait timing to :data:`~pednav_env.calibration.parameters.GAIT_PRIORS` (a start
+    outside it is clipped to it)."""
     if not real:
         raise ValueError("fit: no recordings with a walking speed in a band")
     x0 = START if x0 is None else np.asarray(x0, dtype=float)
-    lower, upper = box(x0.size, knots)
+    lower, upper = box(x0.size, knots, priors)
     return minimize_in_box(
         lambda x: distance(
             x,

@@ -79,6 +79,48 @@ EXTENDED = (*PARAMETERS, SWING_SPEED)
 PITCH_KNOTS = Parameter("pitch_knot_stride_m", 0.0, 0.0, 1.2)
 
 
+#: Opt-in literature priors on the walker population's gait timing
+#: (``calibrate_foot.py --gait-priors``, candidate v8 of docs/SIM_TO_REAL.md): a
+#: narrower box for the values named, (lower, upper) in the fit's units; the other
+#: values keep their box. In the model (:meth:`StanceMotion.cycle_fractions
+#: <pednav_env.gait.stance_motion.StanceMotion.cycle_fractions>`) a walking cycle is
+#: foot flat f (foot-flat to heel-off), heel strike h (heel contact to foot flat),
+#: heel-off h (heel-off to toe-off) and swing 1 − f − 2h; f = f₁ + β ln v.
+#:
+#: - ``flat_fraction`` f₁ (at 1 m/s) in [0.15, 0.43]. Published event timings at
+#:   comfortable speed (1.2–1.4 m/s) put foot flat (forefoot contact) to heel-off
+#:   at 0.20 of the cycle (Perry & Burnfield, *Gait Analysis: Normal and
+#:   Pathological Function*, 2nd ed. 2010: forefoot contact ends loading response
+#:   at about 10 %, heel rise opens terminal stance at about 31 %, toe-off at about
+#:   60 %) to 0.33 (the traditional events of Levangie & Norkin, *Joint Structure
+#:   and Function*: foot flat about 7–8 %, heel-off about 40 %, toe-off about 60 %).
+#:   At 1 m/s the share is larger, by at most 0.15 · ln 1.37 ≈ 0.05 (β below):
+#:   0.20–0.38. Walkers differ: the stance share's SD over healthy adults is
+#:   0.019–0.025 of the cycle (Kirtley's normative collection,
+#:   clinicalgaitanalysis.com/data/stance.html: 61.9 ± 1.9 % and 61.8 ± 2.5 % in two
+#:   groups under 45 years, 61.5 ± 1.9 % and 60.9 ± 2.5 % in students); no SD of the
+#:   foot-flat share itself was found, so that of the stance share, 2 SD = 0.05 either
+#:   side: 0.15–0.43.
+#: - ``flat_speed_slope`` β in [−0.15, 0]. The stance share falls with walking
+#:   speed: 64.2 % − 3.5 % per m/s (Kirtley, Whittle & Jefferson 1985, J Biomed Eng
+#:   7:282, regression over walkers and speeds, r = 0.71), −0.035 · v per unit ln v,
+#:   −0.05 on average from 1 to 2 m/s (the whole change put on foot flat, as the
+#:   model does): never rising (β ≤ 0), and three times that at most.
+#: - ``heel_fraction`` h in [0.12, 0.20]. The model's two moving stance phases
+#:   2h are loading (heel contact to foot flat, 0.07–0.10 of the cycle) plus
+#:   heel-off to toe-off (0.20 from heel-off at 40 %, 0.29–0.31 from heel rise at
+#:   31 % to toe-off at 60–62 %; the same two sources): 2h in 0.27–0.41, h in
+#:   0.135–0.205; 0.12 below, the shipped upper bound 0.20 above.
+#:
+#: ``flat_fraction_std`` (the spread over walkers) keeps its box [0, 0.15]: no
+#: published between-walker spread of the foot-flat share was found to bound it.
+GAIT_PRIORS: Mapping[str, tuple[float, float]] = {
+    "flat_fraction": (0.15, 0.43),
+    "flat_speed_slope": (-0.15, 0.0),
+    "heel_fraction": (0.12, 0.20),
+}
+
+
 def parameter_set(size: int, knots: bool = False) -> tuple[Parameter, ...]:
     """The parameters of a vector of ``size`` values: :data:`PARAMETERS` (15) or
     :data:`EXTENDED` (16), followed by :data:`PITCH_KNOTS` when ``knots`` (one
@@ -95,10 +137,17 @@ def parameter_set(size: int, knots: bool = False) -> tuple[Parameter, ...]:
     )
 
 
-def box(size: int, knots: bool = False) -> tuple[Array, Array]:
-    """Lower and upper bounds of a vector of ``size`` values (:func:`parameter_set`)."""
+def box(size: int, knots: bool = False, priors: bool = False) -> tuple[Array, Array]:
+    """Lower and upper bounds of a vector of ``size`` values (:func:`parameter_set`);
+    with ``priors`` those of :data:`GAIT_PRIORS` narrowed to its ranges."""
     ps = parameter_set(size, knots)
-    return np.array([p.lower for p in ps]), np.array([p.upper for p in ps])
+    lower = np.array([p.lower for p in ps])
+    upper = np.array([p.upper for p in ps])
+    if priors:
+        for i, p in enumerate(ps):
+            if p.name in GAIT_PRIORS:
+                lower[i], upper[i] = GAIT_PRIORS[p.name]
+    return lower, upper
 
 
 def randomization(

@@ -25,9 +25,13 @@ from pednav_env.calibration.objective import (
     swing_distance,
 )
 from pednav_env.calibration.parameters import (
+    GAIT_PRIORS,
+    LOWER,
     NAMES,
+    UPPER,
     START,
     SWING_SPEED,
+    box,
     parameter_set,
     randomization,
 )
@@ -306,3 +310,37 @@ def test_fit_scores_its_start_and_returns_the_better(pseudo_recordings: list) ->
     assert result.distance == distance(result.x, pseudo_recordings, 2, 7)
     if result.kept_start:
         np.testing.assert_array_equal(result.x, START)
+
+
+def test_default_box_is_the_parameters_own_and_the_priors_narrow_the_gait_timing() -> None:
+    lower, upper = box(len(NAMES))
+    np.testing.assert_array_equal(lower, LOWER)
+    np.testing.assert_array_equal(upper, UPPER)
+    p_lower, p_upper = box(len(NAMES), priors=True)
+    stated = {
+        "flat_fraction": (0.15, 0.43),
+        "flat_speed_slope": (-0.15, 0.0),
+        "heel_fraction": (0.12, 0.20),
+    }
+    assert dict(GAIT_PRIORS) == stated
+    for i, name in enumerate(NAMES):
+        expected = stated.get(name, (LOWER[i], UPPER[i]))
+        assert (p_lower[i], p_upper[i]) == expected, name
+        assert LOWER[i] <= p_lower[i] < p_upper[i] <= UPPER[i], name  # narrowed only
+    # with the knots and the swing speed exponent the extra values keep their box
+    k_lower, k_upper = box(len(NAMES) + 2, knots=True, priors=True)
+    np.testing.assert_array_equal(k_lower[: len(NAMES)], p_lower)
+    np.testing.assert_array_equal(k_upper[len(NAMES) :], box(len(NAMES) + 2, knots=True)[1][-2:])
+
+
+def test_fit_with_priors_clips_a_warm_start_outside_them(pseudo_recordings: list) -> None:
+    x0 = START.copy()
+    outside = {"flat_fraction": 0.49, "flat_speed_slope": 0.05, "heel_fraction": 0.06}
+    for name, value in outside.items():
+        x0[NAMES.index(name)] = value
+    lower, upper = box(len(NAMES), priors=True)
+    clipped = np.clip(x0, lower, upper)
+    assert [clipped[NAMES.index(n)] for n in outside] == [0.43, 0.0, 0.12]
+    result = fit(pseudo_recordings, 2, 12, 7, popsize=6, x0=x0, sigma0=0.3, priors=True)
+    assert result.start_distance == distance(clipped, pseudo_recordings, 2, 7)
+    assert np.all(result.x >= lower) and np.all(result.x <= upper)
