@@ -1,4 +1,4 @@
-"""The recorded walkers' cadence against the simulator's law (docs/SIM_TO_REAL.md,
+"""The recorded walkers' cadence against the simulator's law (docs/SIM_TO_REAL_CANDIDATES.md,
 "The walking cadence").
 
     PYTHONPATH=. .venv/bin/python benchmarks/cadence_speed.py \\

@@ -66,14 +66,14 @@ measures the distance's coverage term on N other simulated walks per band
 (:func:`pednav_env.calibration.objective.coverage_seed`) instead of the W1 terms' walks;
 the checks are not affected (they measure coverage with ``pednav sim2real``'s own
 envelope). Both are stored in ``settings``; ``--recheck`` reads ``swing_term`` from
-there. Candidate v7 of docs/SIM_TO_REAL.md used both.
+there. Candidate v7 of docs/SIM_TO_REAL_CANDIDATES.md used both.
 
 ``--gait-priors`` narrows the box of the gait timing to ranges from published gait
 studies (:data:`pednav_env.calibration.parameters.GAIT_PRIORS`: foot flat at 1 m/s
 0.15–0.43 of the cycle, its change per unit ln speed −0.15–0, each heel phase
 0.12–0.20; Perry & Burnfield 2010, Levangie & Norkin, Kirtley et al. 1985);
 a warm start outside is clipped to it. Stored in ``settings`` (``gait_priors``).
-Candidate v8 of docs/SIM_TO_REAL.md.
+Candidate v8 of docs/SIM_TO_REAL_CANDIDATES.md.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@
 SHOE both lie inside the 5–95 % range of its band's simulated walks (60 walks,
 seed 0). This script asks the same of simulated walks from other seeds, as if they
 were recordings: the coverage a perfect simulator would reach under the check
-(docs/SIM_TO_REAL.md, "Candidate v6"). Per band (the four with development
+(docs/SIM_TO_REAL_CANDIDATES.md, "Candidate v6"). Per band (the four with development
 recordings), ``--walks`` pseudo-recordings of seeds ``[seed · 100 + k, i]`` are
 checked against the envelope ``pednav sim2real`` builds (seeds ``[k, i]``).
 

@@ -1,5 +1,5 @@
 """Recorded strides' cycle and speed, and the walking cadence law fitted to them
-(docs/SIM_TO_REAL.md, "The walking cadence").
+(docs/SIM_TO_REAL_CANDIDATES.md, "The walking cadence").
 
 A **stride** runs from one footfall of the instrumented foot to its next:
 

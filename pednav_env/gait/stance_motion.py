@@ -44,7 +44,7 @@ short quick strides swings its foot through smaller angles.
 knots (toe-off, mid-swing, heel strike) follow its length L all the way down:
 they are multiplied by min(1, L / L_k) (:meth:`StanceMotion.pitch_knot_factor`),
 today's knots for strides of at least L_k and a foot that hardly pitches in a
-shuffle (docs/SIM_TO_REAL.md, "Pitch knots that follow the stride length").
+shuffle (docs/SIM_TO_REAL_CANDIDATES.md, "Pitch knots that follow the stride length").
 
 ``heel_rocker`` (off by default) changes the heel strike of the walker's
 realistic strides: the heel comes to rest at its footfall at the heel-strike
