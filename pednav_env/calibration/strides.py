@@ -1,6 +1,7 @@
 """Stride segmentation of a walk without footprints: which stance runs start a
 stride, and which strides the truth positions cannot measure
-(docs/SIM_TO_REAL.md, "Stance labels that flicker").
+(docs/SIM_TO_REAL.md,
+"Strides: split stances, the minimum stride and truth glitches").
 
 A stride is two steps: one footfall of the instrumented foot to its next. Without
 footprints the footfalls are the starts of the cleaned stance runs
