@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from labelled_walk import labelled_walk
 
 from pednav_env.calibration.cadence import RecordedStrides, fit_cadence_law, recorded_strides
 from pednav_env.calibration.parameters import START, randomization
@@ -13,21 +14,8 @@ from pednav_env.calibration.stats import WalkSamples
 RATE = 100.0
 
 
-def labelled_walk(stances: list[tuple[float, float]], positions: list[float]) -> WalkSamples:
-    """A walk along x: the foot at ``positions[k]`` during stance k (start, end in s),
-    moving linearly between stances; still IMU readings (the strides need none)."""
-    n = int(round((stances[-1][1] + 0.5) * RATE))
-    t = np.arange(n) / RATE
-    stance = np.zeros(n, bool)
-    knots_t, knots_x = [], []
-    for (a, b), x in zip(stances, positions, strict=True):
-        stance[int(round(a * RATE)) : int(round(b * RATE))] = True
-        knots_t += [a, b]
-        knots_x += [x, x]
-    pos = np.zeros((n, 3))
-    pos[:, 0] = np.interp(t, knots_t, knots_x)
-    still = np.zeros((n, 3))
-    return WalkSamples(still, still, RATE, "w", stance=stance, truth_pos=pos)
+def _walk(stances: list[tuple[float, float]], positions: list[float]) -> WalkSamples:
+    return labelled_walk(stances, positions, RATE)
 
 
 def test_strides_merge_a_stance_split_by_a_gap_without_movement() -> None:
@@ -36,7 +24,7 @@ def test_strides_merge_a_stance_split_by_a_gap_without_movement() -> None:
     # the foot stays put: that is still one stance, one footfall
     stances = [(0.0, 0.5), (1.2, 1.4), (1.48, 1.7), (2.4, 2.9), (3.6, 4.1)]
     positions = [0.0, 1.0, 1.0, 2.0, 3.0]
-    strides = recorded_strides(labelled_walk(stances, positions))
+    strides = recorded_strides(_walk(stances, positions))
     np.testing.assert_allclose(strides.start_s, [0.0, 1.2, 2.4])
     np.testing.assert_allclose(strides.cycle_s, [1.2, 1.2, 1.2])
     np.testing.assert_allclose(strides.speed_mps, [1 / 1.2] * 3)
@@ -46,7 +34,7 @@ def test_strides_drop_stands_long_cycles_and_shuffles() -> None:
     # a 1.5 s stand, then a 3.5 s gap (not a stride), then a 0.05 m shuffle
     stances = [(0.0, 0.4), (1.0, 2.5), (3.1, 3.5), (7.0, 7.4), (8.0, 8.4), (9.0, 9.4)]
     positions = [0.0, 0.8, 1.6, 2.4, 2.45, 3.25]
-    strides = recorded_strides(labelled_walk(stances, positions))
+    strides = recorded_strides(_walk(stances, positions))
     # kept: 0 → 1.0 (it ends where the stand starts), 8.0 → 9.0; dropped: 1.0 → 3.1
     # (the stand), 3.1 → 7.0 (3.9 s), 7.0 → 8.0 (0.05 m in 1 s, below 0.1 m/s)
     np.testing.assert_allclose(strides.start_s, [0.0, 8.0])

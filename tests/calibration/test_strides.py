@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from labelled_walk import labelled_walk
 
 from pednav_env.calibration.cadence import recorded_strides
 from pednav_env.calibration.stats import WalkSamples, walk_stats
@@ -27,24 +28,7 @@ def _walk(
     freeze: tuple[float, float] | None = None,
     truth: bool = True,
 ) -> WalkSamples:
-    """A labelled walk along x (the foot at ``positions[k]`` during stance k, moving
-    linearly between), still IMU readings; ``freeze`` (t0, t1): the truth position
-    held at its t0 value until t1, where it jumps back (a tracking dropout)."""
-    n = int(round((stances[-1][1] + 0.5) * RATE))
-    t = np.arange(n) / RATE
-    stance = np.zeros(n, bool)
-    knots_t, knots_x = [], []
-    for (a, b), x in zip(stances, positions, strict=True):
-        stance[int(round(a * RATE)) : int(round(b * RATE))] = True
-        knots_t += [a, b]
-        knots_x += [x, x]
-    pos = np.zeros((n, 3))
-    pos[:, 0] = np.interp(t, knots_t, knots_x)
-    if freeze is not None:
-        a, b = (int(round(x * RATE)) for x in freeze)
-        pos[a:b] = pos[a]
-    still = np.zeros((n, 3))
-    return WalkSamples(still, still, RATE, "w", stance=stance, truth_pos=pos if truth else None)
+    return labelled_walk(stances, positions, RATE, freeze, truth)
 
 
 @pytest.mark.parametrize(
