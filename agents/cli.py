@@ -108,10 +108,11 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
 def _cmd_train(args: argparse.Namespace) -> int:
     from agents.policies import FAMILY_ENVS
-    from agents.train import train, train_seeds
+    from agents.train import load_hyperparams, train, train_seeds
 
     if args.filter is not None and args.env_id not in FAMILY_ENVS:
         raise ValueError(f"--filter: {args.env_id} has no filter families")
+    load_hyperparams(args.algo, args.env_id, args.config)  # a bad file before the run dir
     if args.run_dir is not None:
         output_dir(args.run_dir, "--run-dir")
 

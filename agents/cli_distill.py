@@ -10,11 +10,17 @@ from agents.cli_types import nonnegative_int, output_dir, positive_int
 
 def run_distill(args: argparse.Namespace) -> int:
     from agents.distill import distill
-    from agents.evaluate import env_options
+    from agents.evaluate import RECORDING_ENVS, env_options
     from agents.policies import FAMILY_ENVS
     from pednav_env.envs.foot_filters import LEARNED_FAMILY
 
     env_options(args.env_id)  # ValueError for an unknown env id
+    if args.env_id in RECORDING_ENVS:
+        raise ValueError(
+            f"{args.env_id} plays recordings: distillation's teacher is the privileged "
+            "oracle, which only the simulated envs have (distill on pednav/FootZupt-v0 and "
+            "play the student on recordings with pednav evaluate --recordings)"
+        )
     family = (args.filter or LEARNED_FAMILY) if args.env_id in FAMILY_ENVS else None
     if args.filter is not None and family is None:
         raise ValueError(f"--filter: {args.env_id} has no filter families")

@@ -213,6 +213,7 @@ def test_unreadable_run_files_name_the_file(tmp_path, capsys):
     assert main([*argv, "--run-dir", str(tmp_path / "r")]) == 2
     err = capsys.readouterr().err
     assert err == f"pednav: error: config file {str(bad)!r}: not valid YAML at line 2\n"
+    assert not (tmp_path / "r").exists()  # refused before the run directory is made
     run = tmp_path / "run"
     run.mkdir()
     (run / "model.zip").write_bytes(b"")
@@ -225,6 +226,11 @@ def test_unreadable_run_files_name_the_file(tmp_path, capsys):
     assert err.count("\n") == 1
     assert main(["distill", "bogus", "--run-dir", str(tmp_path / "d")]) == 2
     assert capsys.readouterr().err.startswith("pednav: error: unknown environment 'bogus'; known:")
+    assert main(["distill", "pednav/FootZuptReplay-v0", "--run-dir", str(tmp_path / "d")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("pednav: error: pednav/FootZuptReplay-v0 plays recordings")
+    assert err.count("\n") == 1
+    assert not (tmp_path / "d").exists()  # refused before the run directory is made
     assert main(["train", "pednav/WaistStep-v0", "--filter", "shoe"]) == 2
     assert (
         capsys.readouterr().err
