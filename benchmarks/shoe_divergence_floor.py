@@ -13,7 +13,12 @@ it with its exact 95 % interval (Clopper–Pearson), a floor that is optimistic
 because it is the minimum over the sweep on the same episodes.
 
     PYTHONPATH=. .venv/bin/python benchmarks/shoe_divergence_floor.py \
-        --episodes 200 --seed 22200 --json benchmarks/results/shoe_divergence_floor.json
+        --episodes 200 --seed 22200 --json benchmarks/results/shoe_divergence_floor.json \
+        --plot docs/figures/shoe_divergence_floor.png
+    # the figure again from the stored result, nothing played:
+    PYTHONPATH=. .venv/bin/python benchmarks/shoe_divergence_floor.py \
+        --load benchmarks/results/shoe_divergence_floor.json \
+        --plot docs/figures/shoe_divergence_floor.png
 """
 
 from __future__ import annotations
@@ -107,13 +112,70 @@ def print_table(result: dict[str, Any]) -> None:
     )
 
 
+def plot(result: dict[str, Any], path: Path) -> None:
+    """Divergence rate (with its exact 95 % interval) against γ for both sweeps, with
+    ``real-fixed`` and ``tuned`` at their own γ and the 10 % line."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tuned_gamma = 2.25e7 * 100 ** float(
+        read_results(RESULTS_FILE)[result_key(ENV_ID, "shoe")]["action"][0]
+    )
+    fig, ax = plt.subplots(figsize=(7.0, 4.2))
+    for others, marker in zip(OTHER_KNOBS, ("o", "s"), strict=True):
+        rows = [r for r in result["rows"] if r["policy"].endswith(f"others {others}")]
+        gamma = [r["gamma"] for r in rows]
+        rate = [100 * r["divergence_rate"] for r in rows]
+        err = [
+            [100 * (r["divergence_rate"] - r["divergence_ci95"][0]) for r in rows],
+            [100 * (r["divergence_ci95"][1] - r["divergence_rate"]) for r in rows],
+        ]
+        ax.errorbar(
+            gamma,
+            rate,
+            yerr=err,
+            marker=marker,
+            capsize=3,
+            label=f"γ sweep, window/Q/R of {others}",
+        )
+    for name, gamma, marker in (("real-fixed", 2.25e7, "D"), ("tuned", tuned_gamma, "^")):
+        r = next(r for r in result["rows"] if r["policy"] == name)
+        lo, hi = r["divergence_ci95"]
+        ax.errorbar(
+            [gamma],
+            [100 * r["divergence_rate"]],
+            yerr=[[100 * (r["divergence_rate"] - lo)], [100 * (hi - r["divergence_rate"])]],
+            marker=marker,
+            color="k",
+            capsize=3,
+            linestyle="none",
+            label=name,
+        )
+    ax.axhline(10, color="0.5", linestyle="--", linewidth=1, label="10 %")
+    ax.set_xscale("log")
+    ax.set_xlabel("SHOE threshold γ")
+    ax.set_ylabel("episodes diverged (%), exact 95 % interval")
+    ax.set_ylim(0, 100)
+    ax.set_title(f"{ENV_ID}, shoe family, calibrated scenario, {result['episodes']} episodes")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--episodes", type=int, default=200)
     parser.add_argument("--seed", type=int, default=22_200, help="development seeds only")
     parser.add_argument("--json", type=Path, help="also write the result here")
+    parser.add_argument("--load", type=Path, help="plot a stored --json result, play nothing")
+    parser.add_argument("--plot", type=Path, help="save the divergence-against-γ figure here")
     args = parser.parse_args()
-    result = run(args.episodes, args.seed)
+    result = json.loads(args.load.read_text()) if args.load else run(args.episodes, args.seed)
+    if args.plot:
+        plot(result, args.plot)
     print_table(result)
     if args.json:
         args.json.write_text(json.dumps(result, indent=1) + "\n")
