@@ -16,7 +16,10 @@ Policies:
 
 JSON keys (docs/REAL_DATA.md): ``duration_s``, ``rate_hz``,
 ``navigation_start_s``, ``distance_m``, ``final_position_m``, ``stances``;
-with truth ``armse_m``, ``armse_pyshoe_m``, ``final_error_m``; with
+with truth ``armse_m``, ``armse_pyshoe_m``, ``final_error_m``,
+``truth_glitches`` and ``truth_glitch_samples`` (tracking glitches of the
+reference, :func:`pednav_env.calibration.strides.truth_glitches`: reported, and
+left in the metrics); with
 footprints ``footprints``, ``footprint_mean_error_m``,
 ``footprint_final_error_m``, ``footprint_final_error_pct``; with neither
 ``loop_closure_m``.
@@ -32,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from pednav_env.calibration.strides import truth_glitches
 from pednav_env.io import CsvLayout, LoadOptions, Recording, find_recordings, load_recording
 from pednav_env.io.hallway import AUTO, FootprintChoice
 from pednav_env.replay.metrics import footprint_errors, loop_closure, track_errors
@@ -150,6 +154,9 @@ def summarize(rec: Recording, run: RecordingRun) -> dict[str, Any]:
     if rec.has_truth:
         m = track_errors(pos, prep.truth_pos, prep.n_align)
         out.update({k: m[k] for k in ("armse_m", "armse_pyshoe_m", "final_error_m")})
+        spans = truth_glitches(prep.truth_pos, prep.rate_hz)
+        out["truth_glitches"] = int(spans.shape[0])
+        out["truth_glitch_samples"] = int(np.sum(spans[:, 1] - spans[:, 0] + 1))
     if prep.footprints is not None:
         m = footprint_errors(pos[prep.footprints.sample], prep.footprints.pos)
         out.update({k: v for k, v in m.items() if k in FOOTPRINT_KEYS})
@@ -368,6 +375,11 @@ def format_text(name: str, summary: dict[str, Any], issues: str = "") -> str:
             f"ARMSE (PyShoe)   {summary['armse_pyshoe_m']:.3f} m",
             f"final error      {summary['final_error_m']:.3f} m",
         ]
+        if summary.get("truth_glitches"):
+            lines.append(
+                f"truth glitches   {summary['truth_glitches']} ({summary['truth_glitch_samples']} "
+                "samples where the reference froze or jumped faster than 20 m/s; in the ARMSE)"
+            )
     if "footprints" in summary:
         lines += [
             f"footprints       {summary['footprints']}",

@@ -289,6 +289,8 @@ def test_pednav_run_json_keys_with_truth(capsys, tmp_path):
         "armse_m",
         "armse_pyshoe_m",
         "final_error_m",
+        "truth_glitches",
+        "truth_glitch_samples",
     }
     assert out["rate_hz"] == pytest.approx(200, rel=0.01) and len(out["final_position_m"]) == 3
     assert plot.stat().st_size > 1000
@@ -326,3 +328,35 @@ def test_check_policies_refuses_in_one_line_before_a_run():
         check_policies(["real-fixed", "oracle"])
     with pytest.raises(SystemExit, match=r"^--only bogus: unknown policy"):
         check_policies(["bogus"], option="--only")
+
+
+def test_truth_glitches_are_reported(capsys, tmp_path):
+    """A tracking dropout written into a simulated walk's reference (held for 0.3 s in
+    a swing, then back: a jump far above 20 m/s) is counted, sample for sample; the
+    walk as simulated has none."""
+    walk = tmp_path / "walk.csv"
+    assert main(["simulate", "--out", str(walk), "--duration", "20", "--seed", "3"]) == 0
+    capsys.readouterr()
+    assert main(["run", str(walk), "--json"]) == 0
+    clean = json.loads(capsys.readouterr().out)
+    assert clean["truth_glitches"] == 0 and clean["truth_glitch_samples"] == 0
+    lines = walk.read_text().splitlines()
+    header = lines[0].split(",")
+    cols = [header.index(f"pos_{a} (m)") for a in "xy"]
+    rows = [line.split(",") for line in lines[1:]]
+    xy = np.array([[float(r[c]) for c in cols] for r in rows])
+    speed = np.linalg.norm(np.diff(xy, axis=0), axis=1) * 200.0
+    a = int(np.argmax(speed[800:] > 2.0)) + 800  # a swing after the still start
+    b = a + 60  # 0.3 s at 200 Hz
+    assert np.linalg.norm(xy[b] - xy[a]) * 200.0 > 20.0  # the jump back is a glitch
+    for r in rows[a:b]:
+        for c in cols:
+            r[c] = rows[a][c]
+    frozen = tmp_path / "frozen.csv"
+    frozen.write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    assert main(["run", str(frozen), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["truth_glitches"] == 1
+    assert out["truth_glitch_samples"] == b - a + 1  # the frozen samples and the one after
+    assert main(["run", str(frozen)]) == 0
+    assert "truth glitches   1 (61 samples" in capsys.readouterr().out
