@@ -29,6 +29,7 @@ import argparse
 import json
 import math
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -57,8 +58,10 @@ def action_of(gamma: float) -> float:
     return math.log(gamma / GAMMA_0, GAMMA_STEP)
 
 
-def simulated(episodes: int, seed: int) -> dict[str, Any]:
-    """Per regime: mean error and divergence rate of each γ on the same episodes."""
+def simulated(episodes: int, seed: int, bound_m: float | None = None) -> dict[str, Any]:
+    """Per regime: mean error and divergence rate of each γ on the same episodes;
+    ``bound_m``: the env's divergence bound's fixed part (``divergence_error_m``,
+    default the env's 25 m)."""
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
         files = []
@@ -70,6 +73,8 @@ def simulated(episodes: int, seed: int) -> dict[str, Any]:
         for name, speed in REGIMES.items():
             kwargs = speed_config(ENV_ID, {"filter": "shoe", "scenario": "calibrated"}, speed)
             kwargs["filter"] = "shoe"
+            if bound_m is not None:
+                kwargs["config"] = replace(kwargs["config"], divergence_error_m=bound_m)
             result = evaluate(ENV_ID, files, episodes, seed, env_kwargs=kwargs)
             rows = {e["name"]: e for e in result["policies"]}
             out[name] = {
@@ -155,8 +160,10 @@ def plot(result: dict[str, Any], path: Path) -> None:
     ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.set_xlabel("SHOE threshold γ (other settings real-fixed's)")
     ax.set_ylabel("mean error / the curve's minimum")
+    bound = result.get("divergence_error_m")
+    cap = "" if bound is None else f", bound {bound:g} m"
     ax.set_title(
-        f"Where γ works: simulated ({result['episodes']} episodes each) and recorded walks"
+        f"Where γ works: simulated ({result['episodes']} episodes each{cap}) and recorded walks"
     )
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -170,6 +177,12 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=22_400, help="development seeds only")
     parser.add_argument("--pyshoe", type=Path, default=Path("../shared/data/pyshoe-vicon-dev"))
     parser.add_argument("--hallway", type=Path, default=Path("../shared/data/hallway-gcp-dev"))
+    parser.add_argument(
+        "--bound",
+        type=float,
+        default=None,
+        help="simulated episodes' divergence bound, fixed part (m; default the env's 25)",
+    )
     parser.add_argument("--json", type=Path, help="also write the result here")
     parser.add_argument("--load", type=Path, help="a stored --json result: play nothing")
     parser.add_argument("--plot", type=Path, help="save the figure here")
@@ -181,7 +194,8 @@ def main() -> None:
             "episodes": args.episodes,
             "seed": args.seed,
             "thresholds": list(THRESHOLDS),
-            "simulated": simulated(args.episodes, args.seed),
+            "divergence_error_m": args.bound,
+            "simulated": simulated(args.episodes, args.seed, args.bound),
             "recorded": recorded(args.pyshoe, args.hallway),
         }
     print_table(result)
