@@ -26,7 +26,7 @@ output ``FITS`` whose every part's model gets the law of that part's training
 recordings (as ``calibrate_foot.py --cadence-law`` sets it: ``model_options`` and
 ``randomization``, 5 digits), the fitted values unchanged: the quick check of a
 law on a fit without refitting, through ``calibrate_foot.py --merge FILE
---recheck`` and ``slow_walk_phases.py --fits FILE`` (docs/SIM_TO_REAL.md).
+--recheck`` and ``slow_walk_phases.py --fits FILE`` (docs/SIM_TO_REAL_CANDIDATES.md).
 """
 
 from __future__ import annotations

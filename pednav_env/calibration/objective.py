@@ -32,7 +32,7 @@ all bands (:func:`stride_distance`, :func:`coverage_distance`):
   alone does not ask for.
 
 Two opt-in changes to the distance (off by default; the shipped fit's
-distance is unchanged, candidate v7 of docs/SIM_TO_REAL.md):
+distance is unchanged, candidate v7 of docs/SIM_TO_REAL_CANDIDATES.md):
 
 - **swing** (``swing=True``, :func:`swing_distance`), per stride-speed bin of
   the stride term (:func:`stride_bins`), the W1 (decades of rad/s) between the

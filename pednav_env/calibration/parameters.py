@@ -80,7 +80,7 @@ PITCH_KNOTS = Parameter("pitch_knot_stride_m", 0.0, 0.0, 1.2)
 
 
 #: Opt-in literature priors on the walker population's gait timing
-#: (``calibrate_foot.py --gait-priors``, candidate v8 of docs/SIM_TO_REAL.md): a
+#: (``calibrate_foot.py --gait-priors``, candidate v8 of docs/SIM_TO_REAL_CANDIDATES.md): a
 #: narrower box for the values named, (lower, upper) in the fit's units; the other
 #: values keep their box. In the model (:meth:`StanceMotion.cycle_fractions
 #: <pednav_env.gait.stance_motion.StanceMotion.cycle_fractions>`) a walking cycle is

@@ -50,7 +50,8 @@ shuffle (docs/SIM_TO_REAL_CANDIDATES.md, "Pitch knots that follow the stride len
 realistic strides: the heel comes to rest at its footfall at the heel-strike
 knot and stays there while the foot rotates down about it
 (:func:`pednav_env.gait.foot.build_schedule`); off, the heel runs on past the
-footfall and slides back (docs/SIM_TO_REAL.md).
+footfall and slides back (docs/SIM_TO_REAL_CANDIDATES.md, "The heel that ran past
+its footfall").
 
 These functions are compiled into :mod:`pednav_env.gait.foot_kernels`, whose
 numba cache checks that module's file only: after editing this one, delete
