@@ -35,8 +35,9 @@ About 4–6 min of CPU per part with the defaults (1000 evaluations of 8 walks o
 
 ``--swing-speed-exponent`` fits a 16th value, the swing vigour's speed exponent
 (:data:`pednav_env.calibration.parameters.SWING_SPEED`), from 0 (today's behaviour; a
-15-value warm start is extended by it): the candidate v3 of docs/SIM_TO_REAL_CANDIDATES.md
-("A candidate: the swing's vigour by speed"), stored as ``benchmarks/results/calibrate_foot_v3.json``.
+15-value warm start is extended by it): the candidate v3 of
+docs/SIM_TO_REAL_CANDIDATES.md ("A candidate: the swing's vigour by speed"), stored as
+``benchmarks/results/calibrate_foot_v3.json``.
 
 ``--heel-rocker`` fits (and checks) the model whose walkers land the heel at rest
 on its footfall (``StanceRandomization.heel_rocker``, not a fitted value); the
