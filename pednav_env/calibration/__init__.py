@@ -9,6 +9,8 @@
 - :mod:`pednav_env.calibration.sources` — walks from recordings (hallway
   footprint walks included) and simulations, and simulated walks as
   recordings;
+- :mod:`pednav_env.calibration.false_stance` — how much of a walk's swing a
+  too-high SHOE threshold calls stance;
 - :mod:`pednav_env.calibration.compare` — simulator models and the per-band
   comparison of ``pednav sim2real``;
 - :mod:`pednav_env.calibration.fit` — the CMA-ES fit of the calibrated model;

@@ -318,13 +318,18 @@ def clean_labels(flags: Flags, min_samples: int) -> Flags:
     return long_runs(out, min_samples)
 
 
+def truth_speed(truth_pos: Array, rate_hz: float) -> Array:
+    """Foot speed (m/s, 3-D, (T,)) from truth positions by central differences
+    (one-sided at the ends); NaN next to a missing position."""
+    vel = np.gradient(np.asarray(truth_pos, dtype=float), 1.0 / rate_hz, axis=0)
+    return np.linalg.norm(vel, axis=1)
+
+
 def truth_velocity_stance(truth_pos: Array, rate_hz: float) -> Flags:
     """Stance where the smoothed truth speed is below :data:`TRUTH_STANCE_SPEED_MPS`
     (samples without a reference are not stance)."""
-    pos = np.asarray(truth_pos, dtype=float)
-    vel = np.gradient(pos, 1.0 / rate_hz, axis=0)
     n = max(1, int(round(0.05 * rate_hz)))
-    speed = np.linalg.norm(vel, axis=1)
+    speed = truth_speed(truth_pos, rate_hz)
     ok = np.isfinite(speed)
     smooth = np.convolve(np.where(ok, speed, np.inf), np.ones(n) / n, mode="same")
     return ok & (smooth < TRUTH_STANCE_SPEED_MPS)
@@ -355,12 +360,17 @@ def _median(x: Array) -> float:
     return float(np.median(x)) if x.size else float("nan")
 
 
-def walk_stats(samples: WalkSamples, per_stride: bool = True) -> WalkStats:
-    """The statistics of one walk (module docstring); ``per_stride`` False leaves
-    the per-stride arrays empty (the cost of a fit's many simulated walks)."""
+def walking_part(samples: WalkSamples, log_shoe: Array) -> tuple[StanceSource, Flags, Flags, Flags]:
+    """Per sample of ``samples``: where its stance came from, the stance flags
+    (labels, truth velocity or detector; module docstring), the stands (cleaned
+    stance runs of at least :data:`STAND_MIN_S`) and the walking part (not a stand
+    and, with footprints, between the first and the last footprint), as
+    :func:`walk_stats` uses them. ``log_shoe`` is :func:`log10_shoe` of the walk."""
     s = samples
     rate = float(s.rate_hz)
-    log_t = log10_shoe(s.omega_b, s.f_b, rate, s.g)
+    log_t = np.asarray(log_shoe, dtype=float)
+    if log_t.shape != (len(s.omega_b),):
+        raise ValueError(f"{s.name}: log_shoe must be ({len(s.omega_b)},), got {log_t.shape}")
     stand_min = max(1, int(round(STAND_MIN_S * rate)))
     if s.stance is not None:
         source, stance = StanceSource.LABELS, np.asarray(s.stance, dtype=bool)
@@ -378,6 +388,16 @@ def walk_stats(samples: WalkSamples, per_stride: bool = True) -> WalkStats:
         idx = np.asarray(s.footfall_index, dtype=np.int64)
         walking[: idx[0]] = False  # the walk is between the first and last footprint
         walking[idx[-1] + 1 :] = False
+    return source, stance, stand, walking
+
+
+def walk_stats(samples: WalkSamples, per_stride: bool = True) -> WalkStats:
+    """The statistics of one walk (module docstring); ``per_stride`` False leaves
+    the per-stride arrays empty (the cost of a fit's many simulated walks)."""
+    s = samples
+    rate = float(s.rate_hz)
+    log_t = log10_shoe(s.omega_b, s.f_b, rate, s.g)
+    source, stance, stand, walking = walking_part(s, log_t)
     walking_s = float(walking.sum()) / rate
     speed_source, speed = SpeedSource.NONE, float("nan")
     if s.footfall_index is not None and len(s.footfall_index) >= 2 and walking_s > 0:
