@@ -1,10 +1,11 @@
-"""A hand-built labelled walk for the stride tests (tests/calibration)."""
+"""Hand-built labelled walks for the calibration tests (tests/calibration)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from pednav_env.calibration.stats import WalkSamples
+from pednav_env.constants import STANDARD_GRAVITY
 
 
 def labelled_walk(
@@ -33,3 +34,23 @@ def labelled_walk(
         pos[a:b] = pos[a]
     still = np.zeros((n, 3))
     return WalkSamples(still, still, rate_hz, "w", stance=stance, truth_pos=pos if truth else None)
+
+
+def phase_walk(
+    phases: list[tuple[int, float, bool, float]],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(omega_b, f_b, stance, truth_pos)`` of a walk along x built from
+    ``(samples, |ω| rad/s, stance, metres moved)`` phases: ω about x, |f| = g, the
+    foot moving linearly over each phase (sample k at the distance reached before
+    it)."""
+    omega, stance, x = [], [], [0.0]
+    for n, w, st, dist in phases:
+        omega += [w] * n
+        stance += [st] * n
+        x += list(x[-1] + dist * np.arange(1, n + 1) / n)
+    omega_b = np.zeros((len(omega), 3))
+    omega_b[:, 0] = omega
+    f_b = np.tile([0.0, 0.0, STANDARD_GRAVITY], (len(omega), 1))
+    pos = np.zeros((len(omega), 3))
+    pos[:, 0] = x[:-1]
+    return omega_b, f_b, np.array(stance), pos

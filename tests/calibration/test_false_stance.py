@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from labelled_walk import phase_walk
 
 from pednav_env.calibration.false_stance import false_stance
 from pednav_env.calibration.stats import SHOE_GYRO_SIGMA, WalkSamples
-from pednav_env.constants import STANDARD_GRAVITY
 
 RATE = 200.0
 # (samples, |ω| rad/s, stance, metres moved along x): a 2 s stand, 5 strides whose swing
@@ -17,17 +17,8 @@ PHASES = [(400, 0.001, True, 0.0)] + STRIDE * 5 + [(400, 0.001, True, 0.0)]
 
 
 def _walk() -> WalkSamples:
-    w, stance, x = [], [], [0.0]
-    for n, omega, st, metres in PHASES:
-        w += [omega] * n
-        stance += [st] * n
-        x += list(x[-1] + metres * np.arange(1, n + 1) / n)
-    omega_b = np.zeros((len(w), 3))
-    omega_b[:, 0] = w
-    f_b = np.tile([0.0, 0.0, STANDARD_GRAVITY], (len(w), 1))
-    pos = np.zeros((len(w), 3))
-    pos[:, 0] = x[1:]
-    return WalkSamples(omega_b, f_b, RATE, "hand", np.array(stance), pos)
+    omega_b, f_b, stance, pos = phase_walk(PHASES)
+    return WalkSamples(omega_b, f_b, RATE, "hand", stance, pos)
 
 
 def test_shares_follow_the_swing_halves() -> None:

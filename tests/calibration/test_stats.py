@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from labelled_walk import phase_walk
 from testdata import HALLWAY_DATA, PYSHOE_SAMPLE
 
 from pednav_env.calibration.sources import distinct_walks, load_walk
@@ -37,25 +38,7 @@ def _hand_walk() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     for _ in range(STRIDES):
         phases += [(SWING, W_SWING, False, 1.0), (STANCE, W_STANCE, True, 0.0)]
     phases.append((STAND, W_STAND, True, 0.0))
-    return _phase_walk(phases)
-
-
-def _phase_walk(
-    phases: list[tuple[int, float, bool, float]],
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """A walk along x from (samples, |ω|, stance, metres moved) phases, the foot
-    moving linearly over each phase."""
-    omega, stance, x = [], [], [0.0]
-    for n, w, st, dist in phases:
-        omega += [w] * n
-        stance += [st] * n
-        x += list(x[-1] + dist * np.arange(1, n + 1) / n)
-    omega_b = np.zeros((len(omega), 3))
-    omega_b[:, 0] = omega
-    f_b = np.tile([0.0, 0.0, STANDARD_GRAVITY], (len(omega), 1))
-    pos = np.zeros((len(omega), 3))
-    pos[:, 0] = x[:-1]
-    return omega_b, f_b, np.array(stance), pos
+    return phase_walk(phases)
 
 
 def test_log10_shoe_of_a_constant_rotation_is_the_gyro_term() -> None:
@@ -150,7 +133,7 @@ def _short_swing_walk(samples: int, metres: float) -> WalkSamples:
     phases += [(SHORT, W_STANCE, True, 0.0), (SWING, W_SWING, False, 1.0)]
     phases += [(STANCE, W_STANCE, True, 0.0), (SWING, W_SWING, False, 1.0)]
     phases.append((STANCE + STAND, W_STAND, True, 0.0))
-    omega_b, f_b, stance, pos = _phase_walk(phases)
+    omega_b, f_b, stance, pos = phase_walk(phases)
     return WalkSamples(omega_b, f_b, RATE, stance=stance, truth_pos=pos)
 
 
