@@ -54,7 +54,7 @@ from pednav_env.calibration.stats import (
     long_runs,
     runs,
 )
-from pednav_env.calibration.strides import overlaps_glitch, stride_stances, truth_glitches
+from pednav_env.calibration.strides import glitched_strides, stride_stances
 
 Array = NDArray[np.float64]
 
@@ -123,16 +123,14 @@ def recorded_strides(samples: WalkSamples) -> RecordedStrides:
     """The walk's kept strides (module docstring)."""
     rate = float(samples.rate_hz)
     idx, points, stand = footfalls(samples)
-    glitches = np.zeros((0, 2), dtype=np.int64)
-    if samples.truth_pos is not None:
-        glitches = truth_glitches(samples.truth_pos, rate)
+    glitched = glitched_strides(idx, samples.truth_pos, rate)
     rows, left_out = [], []
     for k in range(idx.size - 1):
         a, b = int(idx[k]), int(idx[k + 1])
         cycle = (b - a) / rate
         if b <= a or stand[a:b].any() or cycle > MAX_CYCLE_S:
             continue
-        if glitches.size and overlaps_glitch(np.array([a]), np.array([b]), glitches)[0]:
+        if glitched[k]:
             left_out.append((a / rate, b / rate))
             continue
         speed = float(np.linalg.norm(points[k + 1] - points[k])) / cycle

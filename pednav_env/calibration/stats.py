@@ -55,7 +55,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from pednav_env.calibration.strides import overlaps_glitch, stride_stances, truth_glitches
+from pednav_env.calibration.strides import glitched_strides, stride_stances
 from pednav_env.constants import STANDARD_GRAVITY
 from pednav_env.nav.detectors import ShoeDetectorConfig, shoe_statistic
 
@@ -448,15 +448,13 @@ def _stride_stats(
             points = np.asarray(s.truth_pos, dtype=float)[bounds, :2]
     gyro = np.linalg.norm(s.omega_b, axis=1)
     accel_dev = np.abs(np.linalg.norm(s.f_b, axis=1) - s.g)
-    glitches = np.zeros((0, 2), dtype=np.int64)
-    if s.truth_pos is not None:
-        glitches = truth_glitches(s.truth_pos, rate)
+    glitched = glitched_strides(bounds, s.truth_pos, rate)
     rows, left_out = [], []
     for k in range(bounds.size - 1):
         a, b = int(bounds[k]), int(bounds[k + 1])
         if b <= a or stand[a:b].any() or b > n:
             continue
-        if glitches.size and overlaps_glitch(np.array([a]), np.array([b]), glitches)[0]:
+        if glitched[k]:
             left_out.append((a / rate, b / rate))
             continue
         speed = float("nan")

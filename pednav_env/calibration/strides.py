@@ -23,12 +23,12 @@ footprints the footfalls are the starts of the cleaned stance runs
    landing that slides 6 cm and settles) joins that run.
 
 Where truth positions exist, the strides they cannot measure are found too
-(:func:`truth_glitches`, :func:`overlaps_glitch`): a horizontal step between two
-consecutive samples faster than :data:`MAX_TRUTH_SPEED_MPS` is a tracking glitch
-(no foot moves that fast walking or running), spanning that step and the run of
-identical positions (frozen truth, e.g. a VICON dropout) just before it. Strides
-overlapping a glitch are left out of the per-stride statistics and the cadence,
-and counted.
+(:func:`truth_glitches`, :func:`overlaps_glitch`, :func:`glitched_strides`): a
+horizontal step between two consecutive samples faster than
+:data:`MAX_TRUTH_SPEED_MPS` is a tracking glitch (no foot moves that fast walking
+or running), spanning that step and the run of identical positions (frozen truth,
+e.g. a VICON dropout) just before it. Strides overlapping a glitch are left out of
+the per-stride statistics and the cadence, and counted.
 """
 
 from __future__ import annotations
@@ -161,3 +161,14 @@ def overlaps_glitch(starts: Index, stops: Index, glitches: Index) -> NDArray[np.
     b = np.asarray(stops, dtype=np.int64)[:, None]
     g = np.asarray(glitches, dtype=np.int64).reshape(-1, 2)
     return np.any((a <= g[None, :, 1]) & (g[None, :, 0] <= b), axis=1)
+
+
+def glitched_strides(bounds: Index, truth_pos: Array | None, rate_hz: float) -> NDArray[np.bool_]:
+    """For each stride between consecutive ``bounds`` (sample indices of its start
+    and of the next stride's start), whether it overlaps a truth glitch
+    (:func:`truth_glitches`, :func:`overlaps_glitch`); all False without truth
+    positions."""
+    bounds = np.asarray(bounds, dtype=np.int64)
+    if truth_pos is None or bounds.size < 2:
+        return np.zeros(max(bounds.size - 1, 0), dtype=bool)
+    return overlaps_glitch(bounds[:-1], bounds[1:], truth_glitches(truth_pos, rate_hz))
