@@ -11,6 +11,7 @@ from pednav_env.calibration.cadence import recorded_strides
 from pednav_env.calibration.stats import WalkSamples, walk_stats
 from pednav_env.calibration.strides import (
     MAX_TRUTH_SPEED_MPS,
+    glitched_strides,
     merge_short_strides,
     overlaps_glitch,
     truth_glitches,
@@ -125,3 +126,14 @@ def test_overlap_includes_both_ends() -> None:
     starts, stops = np.array([0, 10, 60, 61]), np.array([10, 30, 80, 90])
     assert overlaps_glitch(starts, stops, glitches).tolist() == [False, True, True, False]
     assert overlaps_glitch(starts, stops, np.zeros((0, 2))).tolist() == [False] * 4
+
+
+def test_glitched_strides_marks_the_strides_through_a_glitch():
+    pos = np.zeros((400, 3))
+    pos[:, 0] = np.arange(400) * 0.005  # 1 m/s at 200 Hz
+    pos[150:160] = pos[150]  # frozen for 50 ms ...
+    pos[160:, 0] += 0.5  # ... then a 0.55 m jump in one sample: 110 m/s
+    bounds = np.array([0, 100, 200, 300, 399])
+    assert glitched_strides(bounds, pos, RATE).tolist() == [False, True, False, False]
+    assert glitched_strides(bounds, None, RATE).tolist() == [False] * 4
+    assert glitched_strides(np.array([5]), pos, RATE).size == 0
