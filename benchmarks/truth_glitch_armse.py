@@ -46,7 +46,7 @@ from baselines.tuned import save_result
 from benchmarks.transfer_by_regime import KEY, RESULTS, paired_ratio_ci
 from pednav_env.calibration.strides import truth_glitches
 from pednav_env.io import find_recordings, load_recording
-from pednav_env.replay.metrics import best_rotation, rotate_h, track_errors
+from pednav_env.replay.metrics import track_errors
 
 ROOT = Path(__file__).resolve().parents[1]
 Array = NDArray[np.float64]
@@ -68,21 +68,8 @@ def armse_kept_rotation(
     """Both ARMSE forms with :func:`track_errors`' rotations and origins (fitted on
     every referenced sample) but the averages taken without the ``leave_out``
     samples. With nothing left out it is :func:`track_errors`' two figures (tested)."""
-    est = np.asarray(pos_est, dtype=float)
-    ref = np.asarray(truth, dtype=float)
-    ok0 = np.isfinite(ref[start:]).all(axis=1)
-    first = start + int(np.argmax(ok0))
-    e_nav = est[start:, :2] - est[first, :2]
-    r_nav = ref[start:, :2] - ref[first, :2]
-    en = np.linalg.norm(e_nav - rotate_h(r_nav, best_rotation(e_nav, r_nav)), axis=1)
-    keep = np.isfinite(en) & ~leave_out[start:]
-    okp = np.isfinite(ref).all(axis=1)
-    i0 = int(np.argmax(okp))
-    ep, rp = est[:, :2] - est[i0, :2], ref[:, :2] - ref[i0, :2]
-    errp = ep - rotate_h(rp, best_rotation(ep, rp))
-    rms = np.sqrt(np.mean(errp**2, axis=1))
-    keepp = np.isfinite(rms) & ~leave_out
-    return {"armse_m": float(np.mean(en[keep])), "armse_pyshoe_m": float(np.mean(rms[keepp]))}
+    m = track_errors(pos_est, truth, start, leave_out=leave_out)
+    return {k: m[k] for k in FORMS}
 
 
 def trial_figures(pos_est: Array, truth: Array, start: int, rate_hz: float) -> dict:

@@ -68,7 +68,9 @@ def distance_walked(pos: Array) -> float:
     return float(np.sum(np.linalg.norm(d[np.isfinite(d).all(axis=1)], axis=1)))
 
 
-def track_errors(pos_est: Array, truth: Array, start: int) -> dict[str, float]:
+def track_errors(
+    pos_est: Array, truth: Array, start: int, leave_out: NDArray[np.bool_] | None = None
+) -> dict[str, float]:
     """The measures of the module docstring for one lane.
 
     Parameters
@@ -76,6 +78,9 @@ def track_errors(pos_est: Array, truth: Array, start: int) -> dict[str, float]:
     pos_est : (T, 3) estimate (navigation frame, 0 at ``start``).
     truth : (T, 3) reference (its own frame), NaN rows allowed.
     start : first navigation sample t₀ (alignment length).
+    leave_out : (T,) optional; samples left out of the two ARMSE averages only (the
+        rotations and origins are still fitted on every referenced sample; e.g. the
+        reference's tracking glitches, ``benchmarks/truth_glitch_armse.py``).
     """
     est = np.asarray(pos_est, dtype=float)
     ref = np.asarray(truth, dtype=float)
@@ -97,9 +102,12 @@ def track_errors(pos_est: Array, truth: Array, start: int) -> dict[str, float]:
     ep, rp = est[:, :2] - est[i0, :2], ref[:, :2] - ref[i0, :2]
     errp = ep - rotate_h(rp, best_rotation(ep, rp))
     rms_axes = np.sqrt(np.mean(errp**2, axis=1))
+    kept, kept_p = good, np.isfinite(rms_axes)
+    if leave_out is not None:
+        kept, kept_p = kept & ~leave_out[t0:], kept_p & ~leave_out
     return {
-        "armse_m": float(np.mean(en[good])),
-        "armse_pyshoe_m": float(np.mean(rms_axes[np.isfinite(rms_axes)])),
+        "armse_m": float(np.mean(en[kept])),
+        "armse_pyshoe_m": float(np.mean(rms_axes[kept_p])),
         "final_error_m": float(en[last]),
         "heading_offset_rad": float(phi),
     }
