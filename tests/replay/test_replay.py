@@ -108,6 +108,27 @@ def test_metrics_on_a_rotated_copy_of_the_truth():
     assert m["armse_pyshoe_m"] == pytest.approx(m["armse_m"] / math.sqrt(2) * 450 / 500)
 
 
+def test_left_out_samples_leave_the_averages_only():
+    truth = np.zeros((300, 3))
+    truth[:, 0] = np.arange(300) * 0.01
+    est = truth.copy()
+    # 1 m off the track on twenty samples, north then south, so that they hardly turn
+    # the fitted rotation (which still sees them)
+    est[200:210, 1] += 1.0
+    est[210:220, 1] -= 1.0
+    bad = np.zeros(300, dtype=bool)
+    bad[200:220] = True
+    m_all = track_errors(est, truth, start=0)
+    m_out = track_errors(est, truth, start=0, leave_out=bad)
+    assert m_all["armse_m"] > 0.05  # about 20/300 m
+    assert m_out["armse_m"] < 0.05 * m_all["armse_m"]
+    assert m_out["armse_pyshoe_m"] < 0.05 * m_all["armse_pyshoe_m"]
+    assert m_out["heading_offset_rad"] == m_all["heading_offset_rad"]
+    assert m_out["final_error_m"] == m_all["final_error_m"]
+    none = track_errors(est, truth, start=0, leave_out=np.zeros(300, dtype=bool))
+    assert none["armse_m"] == m_all["armse_m"]
+
+
 def test_footprint_errors_on_a_hand_made_case():
     """Three footprints g and estimates p̂, both referred to their first point. By
     hand: Σ|p̂ − R(φ)g|² = Σ|p̂|² + Σ|g|² − 2(A cos φ + B sin φ), A = Σ p̂·g,
