@@ -27,7 +27,6 @@ footprints ``footprints``, ``footprint_mean_error_m``,
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -41,6 +40,7 @@ from pednav_env.io.hallway import AUTO, FootprintChoice
 from pednav_env.replay.metrics import footprint_errors, loop_closure, track_errors
 from pednav_env.replay.runner import PreparedRecording, RecordingRun, prepare, run_prepared
 from pednav_env.replay.setup import SETUP_NAMES, RealFilterSetup, load_setup, named_setup
+from pednav_env.replay.simulate import check_output_path as output_file
 from pednav_env.replay.track import run_states, write_track_csv
 
 #: Footprint keys of the JSON summary (:func:`pednav_env.replay.metrics.footprint_errors`).
@@ -214,15 +214,12 @@ def check_policies(names: list[str], option: str = "--policies") -> None:
 
 def check_output_path(path: str | Path, option: str) -> Path:
     """An output file whose directory exists and is writable (checked before the run,
-    not after)."""
-    path = Path(path)
-    if not path.parent.is_dir():
-        raise ValueError(f"{option} {path}: directory {path.parent} does not exist")
-    if not os.access(path.parent, os.W_OK):
-        raise ValueError(f"{option} {path}: directory {path.parent} not writable")
-    if path.is_dir():
-        raise ValueError(f"{option} {path}: is a directory; give a file name")
-    return path
+    not after): :func:`pednav_env.replay.simulate.check_output_path`, the message
+    naming ``option``."""
+    try:
+        return output_file(path)
+    except ValueError as exc:
+        raise ValueError(f"{option} {exc}") from None
 
 
 @dataclass(frozen=True)

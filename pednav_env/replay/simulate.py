@@ -202,11 +202,12 @@ def simulate_walk(config: SimulateConfig) -> SimulatedWalk:
 
 
 def check_output_path(path: str | Path) -> Path:
-    """``path`` as a file to write: ValueError when its directory does not exist or
-    it is a directory (checked before a walk is simulated)."""
+    """``path`` as a file to write: ValueError when it is a directory or its directory
+    does not exist or is not writable (checked before a walk is simulated, and by
+    ``pednav run`` before a run)."""
     path = Path(path)
     if path.is_dir():
-        raise ValueError(f"{path}: is a directory; give a file name (e.g. {path / 'walk.csv'})")
+        raise ValueError(f"{path}: is a directory; give a file name")
     if not path.parent.is_dir():
         raise ValueError(f"{path}: directory {path.parent} does not exist")
     if not os.access(path.parent, os.W_OK):
