@@ -36,11 +36,14 @@ from typing import Any
 import numpy as np
 
 import pednav_env  # noqa: F401  (registers the environments)
-from agents.choose_shoe import threshold_sweep
+from agents.choose_shoe import simulated_recordings, threshold_sweep
 from agents.cli_options import speed_config
 from agents.evaluate import evaluate
 from baselines.tuned import result_key
+from pednav_env.calibration.compare import MODELS
 from pednav_env.io import load_recording
+from pednav_env.replay.metrics import pyshoe_armse_as_published, track_errors
+from pednav_env.replay.runner import prepare, run_prepared
 from pednav_env.replay.setup import real_fixed_setup
 
 ENV_ID = "pednav/FootZupt-v0"
@@ -102,6 +105,54 @@ def recorded(pyshoe: Path, hallway: Path) -> dict[str, Any]:
     return out
 
 
+#: Replayed simulated walks' seed: walk i of a regime from ``default_rng([seed, i])``.
+REPLAYED_SEED = 22_600
+#: Regimes of the replayed walks: :data:`REGIMES` and the PyShoe trials' own speeds
+#: (0.3–1.4 m/s, their walking speeds from truth; added after the first two ran).
+REPLAYED_REGIMES = {**REGIMES, "sim 0.3–1.4 m/s (the trials' speeds)": (0.3, 1.4)}
+#: Their length (s): ``agents.choose_shoe``'s simulated walks, the PyShoe trials' 17–56 s.
+REPLAYED_DURATION_S = (30.0, 60.0)
+
+
+def replayed(walks: int, seed: int = REPLAYED_SEED) -> dict[str, Any]:
+    """Simulated walks scored the way the recordings are: ``walks`` calibrated walks
+    per regime (30–60 s, ``agents.choose_shoe.simulated_recordings``) replayed by
+    ``pednav run``'s runner with ``real-fixed``'s setup and each γ. Per regime and γ:
+    the mean over walks of PyShoe's ARMSE (rotation fitted on the whole track, the
+    recordings' measure) and of the same error with the rotation fitted on the
+    first 0.8 m only (PyShoe's published alignment: a heading error that grows
+    along the walk stays in it, as in the env's error), over the walks on which no
+    γ diverged, and the number of diverged walks per γ."""
+    setup = real_fixed_setup()
+    knobs = {"shoe_threshold": np.asarray(THRESHOLDS, dtype=float)}
+    for name in ("process_noise_scale", "zupt_noise_scale"):
+        knobs[name] = np.full(len(THRESHOLDS), getattr(setup.filter, name))
+    out = {}
+    for name, speed in REPLAYED_REGIMES.items():
+        recordings = simulated_recordings(
+            MODELS["calibrated"], walks, seed, speed, REPLAYED_DURATION_S
+        )
+        whole = np.full((walks, len(THRESHOLDS)), np.inf)
+        start = np.full((walks, len(THRESHOLDS)), np.inf)
+        for i, rec in enumerate(recordings):
+            prep = prepare(rec, setup)
+            run = run_prepared(prep, len(THRESHOLDS), knobs=knobs)
+            for j in np.flatnonzero(~run.diverged):
+                pos = run.pos[j]
+                whole[i, j] = track_errors(pos, prep.truth_pos, prep.n_align)["armse_pyshoe_m"]
+                start[i, j] = pyshoe_armse_as_published(pos, prep.truth_pos)
+        kept = np.isfinite(whole).all(axis=1)
+        out[name.replace("sim", "replayed", 1)] = {
+            "walks": walks,
+            "seed": seed,
+            "walks_kept": int(kept.sum()),
+            "diverged_walks": [int(v) for v in np.sum(~np.isfinite(whole), axis=0)],
+            "mean_error_m": [float(v) for v in whole[kept].mean(axis=0)],
+            "mean_error_start_rotation_m": [float(v) for v in start[kept].mean(axis=0)],
+        }
+    return out
+
+
 def finite_or_none(value: float) -> float | None:
     """``value``, or None (JSON null) where a recording diverged (inf)."""
     return float(value) if math.isfinite(value) else None
@@ -120,6 +171,9 @@ def best_gamma(errors: list[float | None]) -> float:
 
 def print_table(result: dict[str, Any]) -> None:
     curves = {**result["simulated"], **result["recorded"]}
+    for name, c in result.get("replayed", {}).items():
+        curves[name] = c
+        curves[name + ", start rotation"] = {"mean_error_m": c["mean_error_start_rotation_m"]}
     print("gamma     " + "  ".join(f"{name[:24]:>24s}" for name in curves))
     for k, gamma in enumerate(THRESHOLDS):
         cells = []
@@ -128,7 +182,19 @@ def print_table(result: dict[str, Any]) -> None:
             cells.append(f"{'diverged':>24s}" if e is None else f"{e:24.3f}")
         print(f"{gamma:8.2e}  " + "  ".join(cells))
     for name, c in curves.items():
-        print(f"best γ, {name}: {best_gamma(c['mean_error_m']):.3g}")
+        e = as_array(c["mean_error_m"])
+        print(
+            f"best γ, {name}: {best_gamma(c['mean_error_m']):.3g}; at 2.4e7 and 1.3e9 "
+            f"{e[1] / np.nanmin(e):.2f}x and {e[-1] / np.nanmin(e):.2f}x its minimum"
+        )
+
+
+def ratio_curve(
+    ax: Any, errors: list[float | None], color: str, line: str, marker: str, label: str
+) -> None:
+    """One curve divided by its own minimum, against the grid."""
+    e = as_array(errors)
+    ax.plot(THRESHOLDS, e / np.nanmin(e), color=color, linestyle=line, marker=marker, label=label)
 
 
 def plot(result: dict[str, Any], path: Path) -> None:
@@ -139,7 +205,9 @@ def plot(result: dict[str, Any], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7.2, 4.4))
+    replayed_curves = result.get("replayed", {})
+    panels = 2 if replayed_curves else 1
+    fig, axes = plt.subplots(1, panels, figsize=(7.2 * panels, 4.4), squeeze=False)
     styles = {
         "sim 0.3–2.0 m/s (R_room)": ("C0", "--", "o"),
         "PyShoe trials (ARMSE)": ("C0", "-", "s"),
@@ -147,25 +215,32 @@ def plot(result: dict[str, Any], path: Path) -> None:
         "hallway walks (footprint error)": ("C3", "-", "s"),
     }
     curves = {**result["simulated"], **result["recorded"]}
+    ax = axes[0, 0]
     for name, (color, line, marker) in styles.items():
-        e = as_array(curves[name]["mean_error_m"])
-        ax.plot(
-            THRESHOLDS, e / np.nanmin(e), color=color, linestyle=line, marker=marker, label=name
-        )
-    ax.axvline(GAMMA_0, color="0.5", linewidth=1, linestyle=":", label="real-fixed's γ")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_yticks([1, 1.5, 2, 3, 4, 6])
-    ax.yaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
-    ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-    ax.set_xlabel("SHOE threshold γ (other settings real-fixed's)")
-    ax.set_ylabel("mean error / the curve's minimum")
+        ratio_curve(ax, curves[name]["mean_error_m"], color, line, marker, name)
     bound = result.get("divergence_error_m")
     cap = "" if bound is None else f", bound {bound:g} m"
-    ax.set_title(
-        f"Where γ works: simulated ({result['episodes']} episodes each{cap}) and recorded walks"
-    )
-    ax.legend(fontsize=8)
+    ax.set_title(f"Env episodes ({result['episodes']} each{cap}) and recorded walks", fontsize=10)
+    if replayed_curves:
+        ax = axes[0, 1]
+        for name in ("PyShoe trials (ARMSE)", "hallway walks (footprint error)"):
+            color, line, marker = styles[name]
+            ratio_curve(ax, curves[name]["mean_error_m"], color, line, marker, name)
+        colors = ("C0", "C3", "C2")
+        for color, (name, c) in zip(colors, replayed_curves.items(), strict=False):
+            label = f"{name} (ARMSE, {c['walks_kept']} of {c['walks']} walks)"
+            ratio_curve(ax, c["mean_error_m"], color, ":", "^", label)
+        ax.set_title("Simulated walks scored the way recordings are", fontsize=10)
+    for ax in axes[0]:
+        ax.axvline(GAMMA_0, color="0.5", linewidth=1, linestyle=":", label="real-fixed's γ")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_yticks([1, 1.5, 2, 3, 4, 6, 10])
+        ax.yaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+        ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.set_xlabel("SHOE threshold γ (other settings real-fixed's)")
+        ax.set_ylabel("mean error / the curve's minimum")
+        ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -183,8 +258,19 @@ def main() -> None:
         default=None,
         help="simulated episodes' divergence bound, fixed part (m; default the env's 25)",
     )
+    parser.add_argument(
+        "--replayed",
+        type=int,
+        default=0,
+        metavar="WALKS",
+        help="also replay WALKS simulated walks per regime the way recordings are scored",
+    )
     parser.add_argument("--json", type=Path, help="also write the result here")
-    parser.add_argument("--load", type=Path, help="a stored --json result: play nothing")
+    parser.add_argument(
+        "--load",
+        type=Path,
+        help="a stored --json result: play nothing again (--replayed still replays)",
+    )
     parser.add_argument("--plot", type=Path, help="save the figure here")
     args = parser.parse_args()
     if args.load:
@@ -198,6 +284,8 @@ def main() -> None:
             "simulated": simulated(args.episodes, args.seed, args.bound),
             "recorded": recorded(args.pyshoe, args.hallway),
         }
+    if args.replayed:
+        result["replayed"] = replayed(args.replayed)
     print_table(result)
     if args.json:
         args.json.write_text(json.dumps(result, indent=1) + "\n")

@@ -55,3 +55,24 @@ def test_the_sweep_files_play_the_stated_constants(tmp_path):
     policy = load_policy(path, space, "pednav/FootZupt-v0")
     assert policy.filter_family == "shoe"
     assert policy.action.tolist() == [0.5, 0.0, 0.0, 0.0]
+
+
+def test_replayed_walks_are_scored_like_the_recordings(monkeypatch):
+    # the replayed curve is PyShoe's ARMSE of pednav run's runner, the measure
+    # threshold_sweep gives the recordings, on the same simulated walks
+    import numpy as np
+
+    from agents.choose_shoe import simulated_recordings, threshold_sweep
+    from pednav_env.calibration.compare import MODELS
+    from pednav_env.replay.setup import real_fixed_setup
+
+    monkeypatch.setattr(gr, "REPLAYED_REGIMES", {"sim short": (0.8, 1.2)})
+    monkeypatch.setattr(gr, "REPLAYED_DURATION_S", (12.0, 14.0))
+    out = gr.replayed(walks=2, seed=5)["replayed short"]
+    recs = simulated_recordings(MODELS["calibrated"], 2, 5, (0.8, 1.2), (12.0, 14.0))
+    expected = threshold_sweep(real_fixed_setup(), recs, gr.THRESHOLDS)
+    kept = np.isfinite(expected).all(axis=1)
+    assert out["walks"] == 2 and out["walks_kept"] == int(kept.sum()) > 0
+    assert out["diverged_walks"] == np.sum(~np.isfinite(expected), axis=0).tolist()
+    assert out["mean_error_m"] == pytest.approx(expected[kept].mean(axis=0).tolist(), rel=1e-12)
+    assert len(out["mean_error_start_rotation_m"]) == len(gr.THRESHOLDS)
