@@ -54,7 +54,13 @@ from agents.cli_options import (
 )
 from agents.cli_recordings import add_recording_commands
 from agents.cli_tune import add_tune_command
-from agents.cli_types import nonnegative_int, output_dir, positive_float, positive_int
+from agents.cli_types import (
+    nonnegative_int,
+    output_dir,
+    positive_float,
+    positive_int,
+    removing_created_dirs_on_failure,
+)
 from pednav_env import __version__
 
 
@@ -343,14 +349,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _os_error_message(exc: OSError) -> str:
+    """``FILE: reason`` (``FILE -> FILE2: reason`` for a rename), else the error's text."""
+    if exc.filename is None or exc.strerror is None:
+        return str(exc)
+    names = str(exc.filename)
+    if exc.filename2 is not None:
+        names += f" -> {exc.filename2}"
+    return f"{names}: {exc.strerror}"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one subcommand. Bad input (a ValueError) is one line on stderr and exit code 2;
+    a failed read or write (an OSError the up-front checks could not foresee: a full disk,
+    a file removed mid-run) one line naming the file and exit code 1. Either way, and on
+    Ctrl-C (re-raised), output directories the command created and left empty are removed
+    (:func:`agents.cli_types.removing_created_dirs_on_failure`)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args))
+        with removing_created_dirs_on_failure():
+            return int(args.func(args))
     except ValueError as exc:
         print(f"pednav: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:
+        print(f"pednav: error: {_os_error_message(exc)}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

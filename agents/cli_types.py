@@ -2,14 +2,23 @@
 
 A bad value is reported in one line naming its option: the types through argparse
 (:func:`agents.cli.build_parser`), :func:`output_dir` as a ``ValueError`` that
-:func:`agents.cli.main` prints.
+:func:`agents.cli.main` prints. :func:`output_dir` creates its directory before the
+run; inside :func:`removing_created_dirs_on_failure` (which :func:`agents.cli.main`
+runs every command in) the directories it created are removed again, if still empty,
+when the command fails.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
+
+# One list per open removing_created_dirs_on_failure(), innermost last: the directories
+# output_dir created while it was open, in the order they were created.
+_open_registries: list[list[Path]] = []
 
 
 def _integer(text: str) -> int:
@@ -51,10 +60,52 @@ def output_dir(path: str | Path, option: str) -> Path:
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise ValueError(f"{option} {path}: is a file; give a directory")
+    missing = _missing_dirs(path)
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
+        _remove_empty(missing)  # parents made before a deeper mkdir failed
         raise ValueError(f"{option} {path}: cannot create the directory ({exc.strerror})") from None
+    if _open_registries:
+        _open_registries[-1].extend(reversed(missing))
     if not os.access(path, os.W_OK):
         raise ValueError(f"{option} {path}: directory not writable")
     return path
+
+
+@contextmanager
+def removing_created_dirs_on_failure() -> Iterator[None]:
+    """Run a command; if it raises (any exception, KeyboardInterrupt included), remove
+    the directories :func:`output_dir` created meanwhile (with their created parents)
+    that are still empty, deepest first, then re-raise. Directories that existed
+    before, or that hold anything, are left as they are (``rmdir``, never a recursive
+    delete)."""
+    created: list[Path] = []
+    _open_registries.append(created)
+    try:
+        yield
+    except BaseException:
+        _remove_empty(reversed(created))
+        raise
+    finally:
+        _open_registries.pop()
+
+
+def _missing_dirs(path: Path) -> list[Path]:
+    """``path`` and those of its parents that do not exist yet, deepest first."""
+    missing = []
+    absolute = path.absolute()
+    for candidate in (absolute, *absolute.parents):
+        if candidate.exists() or candidate.is_symlink():
+            break
+        missing.append(candidate)
+    return missing
+
+
+def _remove_empty(paths: Iterable[Path]) -> None:
+    """``rmdir`` each of ``paths`` in order; one that is not empty (or gone) stays."""
+    for path in paths:
+        try:
+            path.rmdir()
+        except OSError:
+            pass
