@@ -7,7 +7,7 @@ speeds (every stride at 0.3–1.4 m/s, 30–60 s, turns and stops;
 replayed by ``pednav run``'s runner with ``real-fixed``'s setup, scored by PyShoe's
 ARMSE against the simulated truth, over a grid of SHOE thresholds γ (the other settings
 ``real-fixed``'s; ``agents.choose_shoe.threshold_sweep``). Beside them, the 23 PyShoe
-development trials on the same grid. Four simulator arms on the same walks (same routes
+development trials on the same grid. Simulator arms on the same walks (same routes
 and walkers; each arm changes one part):
 
 - ``calibrated``: the shipped model (MicroStrain 3DM-GX5-25 grade, calibrated stance);
@@ -15,7 +15,10 @@ and walkers; each arm changes one part):
 - ``no stance micro-motion``: the calibrated IMU grade; the stance's micro-motion and
   roll-over amplitudes at their floor (quiet and edge 10⁻⁷ rad, roll-over 0), every other
   walker value kept;
-- ``ideal IMU, no micro-motion``: both.
+- ``ideal IMU, no micro-motion``: both;
+- ``heel rocker``: the shipped model with its opt-in heel rocker
+  (``StanceRandomization.heel_rocker``: the heel comes to rest on its footfall instead of
+  running past it and sliding back; docs/SIM_TO_REAL_CANDIDATES.md), not refitted.
 
 Nothing is chosen on these runs.
 
@@ -53,7 +56,7 @@ REAL_FIXED_INDEX = 1
 
 
 def arms() -> dict[str, SimModel]:
-    """The four simulator arms of the module docstring."""
+    """The simulator arms of the module docstring."""
     calibrated = StanceRandomization.calibrated()
     still = replace(
         calibrated,
@@ -68,6 +71,9 @@ def arms() -> dict[str, SimModel]:
         "ideal IMU": SimModel("ideal IMU", "ideal", calibrated),
         "no stance micro-motion": SimModel("no micro-motion", "microstrain_gx5", still),
         "ideal IMU, no micro-motion": SimModel("ideal, no micro-motion", "ideal", still),
+        "heel rocker": SimModel(
+            "heel rocker", "microstrain_gx5", replace(calibrated, heel_rocker=True)
+        ),
     }
 
 

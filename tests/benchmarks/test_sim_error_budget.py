@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +31,10 @@ def test_the_arms_change_only_what_they_name():
     assert b.roll_rad == 0.0 and a.roll_rad > 0.0
     # the walker's gait timing and swing are the same draw
     assert (b.flat_fraction, b.heel_fraction) == (a.flat_fraction, a.heel_fraction)
+    rocker = arms["heel rocker"]
+    assert rocker.stance.heel_rocker and not cal.stance.heel_rocker
+    assert rocker.imu_grade == cal.imu_grade
+    assert replace(rocker.stance, heel_rocker=False) == cal.stance
     assert arms["ideal IMU, no micro-motion"] == type(still)(
         arms["ideal IMU, no micro-motion"].name, "ideal", still.stance
     )

@@ -1,0 +1,129 @@
+"""Where in the swing the foot moves fast without rotating, recorded and simulated
+(docs/SIM_TO_REAL.md, "The error level and where it comes from").
+
+Per tenth of the swing (:mod:`pednav_env.calibration.swing_phases`): the median foot
+speed, the median and 10th percentile of |ω|, and the share of samples faster than
+1 m/s turning slower than 1 rad/s. On the 23 PyShoe development trials (stance from
+their VICON labels, speed from VICON) and on simulated walks at the trials' speeds
+(0.3–1.4 m/s, 30–60 s, walk i from ``default_rng([seed, i])``; truth stance and speed):
+the shipped calibrated model and the same with its opt-in heel rocker. Nothing is
+chosen on these runs.
+
+    PYTHONPATH=. .venv/bin/python benchmarks/swing_phases.py --walks 40 \\
+        --json benchmarks/results/swing_phases.json --plot docs/figures/swing_phases.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pednav_env.calibration.compare import SimModel
+from pednav_env.calibration.sources import load_walk, samples_from_simulation
+from pednav_env.calibration.swing_phases import swing_phase_profile
+from pednav_env.gait.stance_motion import StanceRandomization
+
+SPEED_MPS, DURATION_S, SEED = (0.3, 1.4), (30.0, 60.0), 22_600
+
+
+def models() -> dict[str, SimModel]:
+    calibrated = StanceRandomization.calibrated()
+    return {
+        "simulated, calibrated": SimModel("calibrated", "microstrain_gx5", calibrated),
+        "simulated, heel rocker": SimModel(
+            "heel rocker", "microstrain_gx5", replace(calibrated, heel_rocker=True)
+        ),
+    }
+
+
+def run(walks: int, seed: int, pyshoe: Path) -> dict[str, Any]:
+    result: dict[str, Any] = {"walks": walks, "seed": seed, "speed_mps": list(SPEED_MPS)}
+    trials = [load_walk(p) for p in sorted(pyshoe.glob("*.mat"))]
+    result["PyShoe trials"] = swing_phase_profile(trials)
+    for name, model in models().items():
+        truth, imu = model.batch(SPEED_MPS, walks, seed, DURATION_S)
+        sims = [samples_from_simulation(truth, imu, i) for i in range(walks)]
+        result[name] = swing_phase_profile(sims)
+    return result
+
+
+def profiles(result: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    return {k: v for k, v in result.items() if isinstance(v, dict)}
+
+
+def print_table(result: dict[str, Any]) -> None:
+    for name, p in profiles(result).items():
+        print(f"{name} ({p['swing_samples']} swing samples)")
+        print("  phase      speed m/s  |ω| median  |ω| p10  fast & still")
+        edges = p["bin_edges"]
+        for k in range(len(edges) - 1):
+            print(
+                f"  {edges[k]:.1f}–{edges[k + 1]:.1f}   {p['speed_median_mps'][k]:9.2f}"
+                f"  {p['rate_median_rad_s'][k]:10.2f}  {p['rate_p10_rad_s'][k]:7.2f}"
+                f"  {p['fast_still_share'][k]:12.3f}"
+            )
+
+
+def plot(result: dict[str, Any], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(13.5, 3.9))
+    styles = {
+        "PyShoe trials": ("k", "-", "s"),
+        "simulated, calibrated": ("C3", "--", "o"),
+        "simulated, heel rocker": ("C0", ":", "^"),
+    }
+    panels = (
+        ("speed_median_mps", "median foot speed (m/s)"),
+        ("rate_median_rad_s", "median |ω| (rad/s)"),
+        ("fast_still_share", "share > 1 m/s and < 1 rad/s"),
+    )
+    for ax, (key, label) in zip(axes, panels, strict=True):
+        for name, p in profiles(result).items():
+            color, line, marker = styles.get(name, ("0.5", "-", "."))
+            edges = np.array(p["bin_edges"])
+            mid = 0.5 * (edges[1:] + edges[:-1])
+            values = np.array([np.nan if v is None else v for v in p[key]], dtype=float)
+            ax.plot(mid, values, color=color, linestyle=line, marker=marker, label=name)
+        ax.set_xlabel("phase in the swing (0: stance ends, 1: next stance)")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle(
+        f"The swing at the PyShoe trials' speeds ({result['walks']} simulated walks per model)",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--walks", type=int, default=40)
+    parser.add_argument("--seed", type=int, default=SEED, help="development seeds only")
+    parser.add_argument("--pyshoe", type=Path, default=Path("../shared/data/pyshoe-vicon-dev"))
+    parser.add_argument("--json", type=Path, help="also write the result here")
+    parser.add_argument("--load", type=Path, help="a stored --json result: run nothing")
+    parser.add_argument("--plot", type=Path, help="save the figure here")
+    args = parser.parse_args()
+    result = (
+        json.loads(args.load.read_text()) if args.load else run(args.walks, args.seed, args.pyshoe)
+    )
+    print_table(result)
+    if args.json:
+        args.json.write_text(json.dumps(result, indent=1) + "\n")
+    if args.plot:
+        plot(result, args.plot)
+
+
+if __name__ == "__main__":
+    main()
