@@ -74,6 +74,11 @@ def arms() -> dict[str, SimModel]:
         "heel rocker": SimModel(
             "heel rocker", "microstrain_gx5", replace(calibrated, heel_rocker=True)
         ),
+        "heel rocker, monotone pitch": SimModel(
+            "heel rocker, monotone pitch",
+            "microstrain_gx5",
+            replace(calibrated, heel_rocker=True, monotone_pitch=True),
+        ),
     }
 
 

@@ -6,8 +6,9 @@ speed, the median and 10th percentile of |ω|, and the share of samples faster t
 1 m/s turning slower than 1 rad/s. On the 23 PyShoe development trials (stance from
 their VICON labels, speed from VICON) and on simulated walks at the trials' speeds
 (0.3–1.4 m/s, 30–60 s, walk i from ``default_rng([seed, i])``; truth stance and speed):
-the shipped calibrated model and the same with its opt-in heel rocker. Nothing is
-chosen on these runs.
+the shipped calibrated model, the same with its opt-in heel rocker, and with the heel
+rocker and the opt-in monotone swing pitch (``StanceMotion.monotone_pitch``). Nothing
+is chosen on these runs.
 
     PYTHONPATH=. .venv/bin/python benchmarks/swing_phases.py --walks 40 \\
         --json benchmarks/results/swing_phases.json --plot docs/figures/swing_phases.png
@@ -25,6 +26,7 @@ import numpy as np
 
 from pednav_env.calibration.compare import SimModel
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
+from pednav_env.calibration.stats import WalkSamples
 from pednav_env.calibration.swing_phases import swing_phase_profile
 from pednav_env.gait.stance_motion import StanceRandomization
 
@@ -38,16 +40,32 @@ def models() -> dict[str, SimModel]:
         "simulated, heel rocker": SimModel(
             "heel rocker", "microstrain_gx5", replace(calibrated, heel_rocker=True)
         ),
+        "simulated, heel rocker, monotone pitch": SimModel(
+            "heel rocker, monotone pitch",
+            "microstrain_gx5",
+            replace(calibrated, heel_rocker=True, monotone_pitch=True),
+        ),
     }
 
 
-def run(walks: int, seed: int, pyshoe: Path) -> dict[str, Any]:
-    result: dict[str, Any] = {"walks": walks, "seed": seed, "speed_mps": list(SPEED_MPS)}
-    trials = [load_walk(p) for p in sorted(pyshoe.glob("*.mat"))]
+def run(walks: int, seed: int, pyshoe: Path, truth_speed_stance: bool) -> dict[str, Any]:
+    """The profiles; ``truth_speed_stance``: every walk's stance from its truth speed
+    (labels dropped; ``calibration.stats.truth_velocity_stance``), one rule for both."""
+
+    def stance_of(w: WalkSamples) -> WalkSamples:
+        return replace(w, stance=None) if truth_speed_stance else w
+
+    result: dict[str, Any] = {
+        "walks": walks,
+        "seed": seed,
+        "speed_mps": list(SPEED_MPS),
+        "stance": "truth speed" if truth_speed_stance else "labels / simulator truth",
+    }
+    trials = [stance_of(load_walk(p)) for p in sorted(pyshoe.glob("*.mat"))]
     result["PyShoe trials"] = swing_phase_profile(trials)
     for name, model in models().items():
         truth, imu = model.batch(SPEED_MPS, walks, seed, DURATION_S)
-        sims = [samples_from_simulation(truth, imu, i) for i in range(walks)]
+        sims = [stance_of(samples_from_simulation(truth, imu, i)) for i in range(walks)]
         result[name] = swing_phase_profile(sims)
     return result
 
@@ -80,6 +98,7 @@ def plot(result: dict[str, Any], path: Path) -> None:
         "PyShoe trials": ("k", "-", "s"),
         "simulated, calibrated": ("C3", "--", "o"),
         "simulated, heel rocker": ("C0", ":", "^"),
+        "simulated, heel rocker, monotone pitch": ("C2", "-.", "v"),
     }
     panels = (
         ("speed_median_mps", "median foot speed (m/s)"),
@@ -111,12 +130,19 @@ def main() -> None:
     parser.add_argument("--walks", type=int, default=40)
     parser.add_argument("--seed", type=int, default=SEED, help="development seeds only")
     parser.add_argument("--pyshoe", type=Path, default=Path("../shared/data/pyshoe-vicon-dev"))
+    parser.add_argument(
+        "--truth-speed-stance",
+        action="store_true",
+        help="stance from every walk's truth speed instead of its labels (one rule for both)",
+    )
     parser.add_argument("--json", type=Path, help="also write the result here")
     parser.add_argument("--load", type=Path, help="a stored --json result: run nothing")
     parser.add_argument("--plot", type=Path, help="save the figure here")
     args = parser.parse_args()
     result = (
-        json.loads(args.load.read_text()) if args.load else run(args.walks, args.seed, args.pyshoe)
+        json.loads(args.load.read_text())
+        if args.load
+        else run(args.walks, args.seed, args.pyshoe, args.truth_speed_stance)
     )
     print_table(result)
     if args.json:

@@ -31,7 +31,10 @@ its knots (stance, mid-swing). The ``realistic`` routes add, beyond the paper:
   of 10 v² m/s²; it is C² at contact and decays within ~0.1 s;
 - optionally (``StanceMotion.heel_rocker``) a heel that lands at rest on its
   footfall and stays there while the foot rolls down
-  (:func:`pednav_env.gait.heel_rocker.heel_rocker_coefficients`).
+  (:func:`pednav_env.gait.heel_rocker.heel_rocker_coefficients`);
+- optionally (``StanceMotion.monotone_pitch``) a swing pitch that is monotone between
+  its knots, turning back only at a knot
+  (:func:`pednav_env.gait.splines.monotone_clamped_cubic_coefficients`).
 
 All outputs are batched over walkers: ``(N, T, ...)``.
 
@@ -65,7 +68,7 @@ from pednav_env.gait.foot_kernels import (
 from pednav_env.gait.foot_route import Route
 from pednav_env.gait.heel_rocker import heel_rocker_coefficients
 from pednav_env.gait.lever_arm import Vec, lever_arm_rows
-from pednav_env.gait.splines import clamped_cubic_coefficients
+from pednav_env.gait.splines import clamped_cubic_coefficients, monotone_clamped_cubic_coefficients
 from pednav_env.gait.stance_motion import COLUMNS as STANCE_COLUMNS
 from pednav_env.gait.stance_motion import stance_table
 
@@ -283,6 +286,9 @@ def build_schedule(route: Route) -> HeelSchedule:
         coefs[:, :, 1:] = heel_rocker_coefficients(knots_t, knots_y)
     elif n_str:
         coefs[:, :, 1:] = clamped_cubic_coefficients(knots_t, knots_y).reshape(4, n_str, n_int, 6)
+    if n_str and realistic_knots and motion is not None and motion.monotone_pitch:
+        pitch = monotone_clamped_cubic_coefficients(knots_t, knots_y[..., 4:5])
+        coefs[:, :, 1:, 4] = pitch.reshape(4, n_str, n_int)
     coefs = coefs.reshape(4, -1, 6)
     breaks = np.concatenate(([0.0], knots_t.ravel()))
     stance_start = t_start - stance_len

@@ -53,6 +53,13 @@ knot and stays there while the foot rotates down about it
 footfall and slides back (docs/SIM_TO_REAL_CANDIDATES.md, "The heel that ran past
 its footfall").
 
+``monotone_pitch`` (off by default) makes the swing's pitch monotone between its knots
+(stance, toe-off, mid-swing, heel strike, next stance;
+:func:`pednav_env.gait.splines.monotone_clamped_cubic_coefficients`, Fritsch & Carlson
+1980): the foot's pitch then turns back only at a knot instead of overshooting the
+toe-off or heel-strike knot while the foot still moves (docs/SIM_TO_REAL.md, "The error
+level and where it comes from"). The other angles and the heel keep their splines.
+
 These functions are compiled into :mod:`pednav_env.gait.foot_kernels`, whose
 numba cache checks that module's file only: after editing this one, delete
 ``pednav_env/gait/__pycache__/foot_kernels.*.nb[ic]``.
@@ -157,12 +164,14 @@ class StanceMotion:
     cadence_intercept_hz: float | None = None
     cadence_slope_hz_per_mps: float = DEFAULT_CADENCE[1]
     pitch_knot_stride_m: float = 0.0
+    monotone_pitch: bool = False
 
     def __post_init__(self) -> None:
-        if not isinstance(self.heel_rocker, bool):
-            raise ValueError(
-                f"StanceMotion.heel_rocker must be True or False, got {self.heel_rocker!r}"
-            )
+        for flag in ("heel_rocker", "monotone_pitch"):
+            if not isinstance(getattr(self, flag), bool):
+                raise ValueError(
+                    f"StanceMotion.{flag} must be True or False, got {getattr(self, flag)!r}"
+                )
         check_pitch_knot_stride("StanceMotion", self.pitch_knot_stride_m)
         check_cadence_law("StanceMotion", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps)
         for name in ("quiet_rad", "edge_rad", "roll_rad", "stance_spread_log10"):
@@ -360,12 +369,14 @@ class StanceRandomization:
     cadence_slope_hz_per_mps: float = DEFAULT_CADENCE[1]
     cadence_log10_std: float = 0.0
     pitch_knot_stride_m: float = 0.0
+    monotone_pitch: bool = False
 
     def __post_init__(self) -> None:
-        if not isinstance(self.heel_rocker, bool):
-            raise ValueError(
-                f"StanceRandomization.heel_rocker must be True or False, got {self.heel_rocker!r}"
-            )
+        for flag in ("heel_rocker", "monotone_pitch"):
+            if not isinstance(getattr(self, flag), bool):
+                raise ValueError(
+                    f"StanceRandomization.{flag} must be True or False, got {getattr(self, flag)!r}"
+                )
         check_pitch_knot_stride("StanceRandomization", self.pitch_knot_stride_m)
         check_cadence_law(
             "StanceRandomization", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps
@@ -448,6 +459,7 @@ class StanceRandomization:
             seed=int(rng.integers(2**31)),
             heel_rocker=self.heel_rocker,
             pitch_knot_stride_m=self.pitch_knot_stride_m,
+            monotone_pitch=self.monotone_pitch,
             **self._draw_gait(rng),
             **self._draw_cadence(rng),
         )

@@ -145,6 +145,11 @@ def test_model_from_json_reads_a_fit_output_and_a_plain_object(tmp_path: Path) -
     assert model.imu_grade == "adis16470"
     # the given keys, and StanceRandomization's defaults for the others
     assert model.stance == StanceRandomization(flat_fraction=0.3, swing_speed_exponent=0.4)
+    flags = tmp_path / "flags.json"
+    flags.write_text(json.dumps({"heel_rocker": True, "monotone_pitch": True}))
+    assert model_from_json(flags).stance == StanceRandomization(
+        heel_rocker=True, monotone_pitch=True
+    )
 
 
 @pytest.mark.parametrize(
@@ -160,6 +165,7 @@ def test_model_from_json_reads_a_fit_output_and_a_plain_object(tmp_path: Path) -
         ('{"randomization": {"edge_log10_mean": null}}', "key 'edge_log10_mean'"),
         ('{"heel_rocker": 1}', "key 'heel_rocker' must be true or false"),
         ('{"heel_rocker": "yes"}', "key 'heel_rocker' must be true or false"),
+        ('{"monotone_pitch": 0}', "key 'monotone_pitch' must be true or false"),
     ],
 )
 def test_model_from_json_rejects_malformed_files(tmp_path: Path, text: str, message: str) -> None:
