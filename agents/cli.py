@@ -24,7 +24,7 @@ Subcommands (their JSON formats are contracts, see docs/CONTRACTS.md):
   vector env against a filterpy reference (ENV = foot, waist, marker).
 - ``pednav fit-rule RECORDING|DIR ... --out DIR [--folds K]`` — the gait-adaptive
   SHOE rule fitted on recordings with truth (:mod:`agents.cli_fit_rule`).
-- ``pednav sim2real RECORDING... [--model M] [--walks N] [--json] [--plot DIR]``
+- ``pednav sim2real RECORDING... [--model M] [--walks N] [--nav] [--json] [--plot DIR]``
   — the foot simulator beside recorded walks per speed band
   (docs/SIM_TO_REAL.md).
 

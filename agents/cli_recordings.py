@@ -112,13 +112,15 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from pednav_env.calibration.compare import compare
-    from pednav_env.calibration.sources import distinct_walks, load_walk
+    from pednav_env.calibration.sources import distinct_walks, samples_from_recording
     from pednav_env.calibration.stats import walk_stats
-    from pednav_env.io import find_recordings
+    from pednav_env.io import find_recordings, load_recording
 
     model = _sim_model(args.model)
     if args.walks < 2:
         raise ValueError(f"--walks must be ≥ 2 (each band's spread), got {args.walks}")
+    if args.nav_walks < 2:
+        raise ValueError(f"--nav-walks must be ≥ 2 (a spread of twins), got {args.nav_walks}")
     if args.plot is not None:
         output_dir(args.plot, "--plot")
     paths = []
@@ -127,7 +129,13 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
         paths.extend(find_recordings(p) if p.is_dir() else [p])
     if not paths:
         raise ValueError(f"no recordings (.csv, .mat) in {' '.join(args.recordings)}")
-    walks, dropped = distinct_walks([load_walk(p) for p in paths])
+    for p in paths:
+        if not p.is_file():
+            raise ValueError(f"{p}: no such file")
+    recordings = [load_recording(p) for p in paths]
+    samples = [samples_from_recording(r) for r in recordings]
+    recording_of = {id(w): r for w, r in zip(samples, recordings, strict=True)}
+    walks, dropped = distinct_walks(samples)
     for copy, kept in dropped:
         print(
             f"{copy}: the same walk as {kept} (footprints and duration); counted once",
@@ -140,7 +148,22 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
 
         for path in write_figures(report, args.plot):
             print(f"wrote {path}", file=sys.stderr)
-    print(json.dumps(report.to_json()) if args.json else report.format_text())
+    level = None
+    if args.nav:
+        from agents.error_level import error_level
+
+        kept = [recording_of[id(w)] for w in walks]
+        level = error_level(kept, model, args.nav_walks, args.seed)
+    if args.json:
+        out = report.to_json()
+        if level is not None:
+            out["error_level"] = level.to_json()
+        print(json.dumps(out))
+    else:
+        print(report.format_text())
+        if level is not None:
+            print()
+            print(level.format_text())
     return 0
 
 
@@ -162,6 +185,18 @@ def _add_sim2real(sub: argparse._SubParsersAction) -> None:
         help="simulated walks per speed band, ≥ 2 (default 60)",
     )
     s2r.add_argument("--seed", type=nonnegative_int, default=0, help="simulation seed (default 0)")
+    s2r.add_argument(
+        "--nav",
+        action="store_true",
+        help="also the error level: real-fixed's ARMSE on each recording with dense truth "
+        "beside simulated twins of its speed and length (docs/SIM_TO_REAL.md)",
+    )
+    s2r.add_argument(
+        "--nav-walks",
+        type=positive_int,
+        default=20,
+        help="simulated twins per recording for --nav, ≥ 2 (default 20)",
+    )
     s2r.add_argument("--json", action="store_true", help="print one JSON object")
     s2r.add_argument("--plot", metavar="DIR", default=None, help="write histograms to DIR")
     s2r.set_defaults(func=_cmd_sim2real)

@@ -1,0 +1,220 @@
+"""The simulator's navigation error beside the recordings' (``pednav sim2real --nav``;
+docs/SIM_TO_REAL.md, "The error level and where it comes from").
+
+The statistics of ``pednav sim2real`` compare signals; this compares what the signals
+do to a filter. For every recording with a dense truth track (PyShoe's VICON trials, a
+generic CSV with positions; footprint-only walks are listed as not checked):
+
+- the recording's error: ``real-fixed``'s PyShoe ARMSE with ``pednav run``'s runner
+  (:func:`agents.choose_shoe.lane_errors`);
+- its simulated twins: ``walks`` walks of the simulator model with every stride's speed
+  within ±:data:`SPEED_SPREAD` of the recording's walking speed
+  (:func:`pednav_env.calibration.stats.walk_stats`) and the recording's length, turns
+  and stops as the calibrated scenario draws them; recording r's walk i draws from
+  ``numpy.random.default_rng([100000·seed + r, i])``; the same filter and measure
+  against the simulated truth;
+- *covered*: the recording's ARMSE inside the twins' 5–95 % range (order statistics; a
+  diverged walk counts as an infinite error); its percentile among them; and the ratio
+  of the twins' median to the recording's ARMSE.
+
+Summary: recordings covered (exact 95 % interval), the geometric mean of the ratios
+(how many times harder, > 1, or easier the simulated walks are to navigate), and the
+mean percentile (50 if the twins were the recordings' own distribution; a uniform
+percentile's mean over n recordings has a standard deviation of 28.9/√n).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from agents.choose_shoe import lane_errors, simulated_recordings
+from pednav_env.calibration.compare import ENVELOPE_PERCENT, SimModel, coverage_interval
+from pednav_env.calibration.sources import samples_from_recording
+from pednav_env.calibration.stats import walk_stats
+from pednav_env.io import Recording
+from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
+
+Array = NDArray[np.float64]
+
+#: Twins' stride speeds: the recording's walking speed × (1 ± SPEED_SPREAD).
+SPEED_SPREAD = 0.1
+#: Twins' speed limits (m/s): the walk generator's.
+SPEED_LIMITS_MPS = (0.1, 3.8)
+#: Shortest twin (s): a 2 s stand, strides and a 1 s stand.
+MIN_DURATION_S = 10.0
+#: Simulated twins per recording unless told otherwise.
+DEFAULT_WALKS = 20
+
+
+@dataclass(frozen=True)
+class RecordingLevel:
+    """One recording's error beside its twins' (m; inf where the filter diverged)."""
+
+    name: str
+    speed_mps: float
+    duration_s: float
+    armse_m: float
+    twins_m: Array
+
+    @property
+    def envelope_m(self) -> tuple[float, float]:
+        lo, hi = (p / 100.0 for p in ENVELOPE_PERCENT)
+        return (
+            float(np.quantile(self.twins_m, lo, method="inverted_cdf")),
+            float(np.quantile(self.twins_m, hi, method="inverted_cdf")),
+        )
+
+    @property
+    def median_m(self) -> float:
+        return float(np.quantile(self.twins_m, 0.5, method="inverted_cdf"))
+
+    @property
+    def covered(self) -> bool:
+        lo, hi = self.envelope_m
+        return lo <= self.armse_m <= hi
+
+    @property
+    def percentile(self) -> float:
+        """Share of twins (%) with a smaller error than the recording (ties half)."""
+        below = np.sum(self.twins_m < self.armse_m) + 0.5 * np.sum(self.twins_m == self.armse_m)
+        return float(100.0 * below / self.twins_m.size)
+
+    @property
+    def ratio(self) -> float:
+        """Twins' median over the recording's error."""
+        return self.median_m / self.armse_m
+
+    def to_json(self) -> dict[str, Any]:
+        def num(v: float) -> float | None:
+            return float(v) if math.isfinite(v) else None
+
+        lo, hi = self.envelope_m
+        return {
+            "name": self.name,
+            "speed_mps": self.speed_mps,
+            "duration_s": self.duration_s,
+            "armse_m": num(self.armse_m),
+            "twins": int(self.twins_m.size),
+            "twins_diverged": int(np.sum(~np.isfinite(self.twins_m))),
+            "twin_median_m": num(self.median_m),
+            "twin_envelope_m": [num(lo), num(hi)],
+            "percentile": self.percentile,
+            "covered": self.covered,
+            "ratio": num(self.ratio),
+        }
+
+
+@dataclass(frozen=True)
+class ErrorLevelReport:
+    model: str
+    walks: int
+    seed: int
+    rows: list[RecordingLevel]
+    not_checked: list[str]
+
+    @property
+    def coverage(self) -> tuple[int, int]:
+        return sum(r.covered for r in self.rows), len(self.rows)
+
+    @property
+    def mean_percentile(self) -> float | None:
+        """Mean of the recordings' percentiles among their twins: 50 for a simulator
+        whose twins are the recordings' own distribution (± 29/√n)."""
+        return float(np.mean([r.percentile for r in self.rows])) if self.rows else None
+
+    @property
+    def ratio_geomean(self) -> float | None:
+        ratios = [r.ratio for r in self.rows if math.isfinite(r.ratio) and r.ratio > 0]
+        return float(np.exp(np.mean(np.log(ratios)))) if ratios else None
+
+    def to_json(self) -> dict[str, Any]:
+        k, n = self.coverage
+        lo, hi = coverage_interval(k, n) if n else (None, None)
+        return {
+            "model": self.model,
+            "walks": self.walks,
+            "seed": self.seed,
+            "covered": k,
+            "recordings": n,
+            "covered_interval": [lo, hi],
+            "ratio_geomean": self.ratio_geomean,
+            "mean_percentile": self.mean_percentile,
+            "not_checked": self.not_checked,
+            "rows": [r.to_json() for r in self.rows],
+        }
+
+    def format_text(self) -> str:
+        lines = [
+            f"error level: real-fixed's PyShoe ARMSE, each recording against {self.walks} "
+            f"simulated twins ({self.model}; same speed ±{SPEED_SPREAD:.0%}, same length)",
+            f"{'recording':28s} {'m/s':>5s} {'s':>5s} {'ARMSE m':>8s} "
+            f"{'twins: median [5–95 %] m':>28s} {'pct':>5s}  covered",
+        ]
+
+        def cell(v: float) -> str:
+            return f"{v:.3f}" if math.isfinite(v) else "div."
+
+        for r in self.rows:
+            lo, hi = r.envelope_m
+            twins = f"{cell(r.median_m)} [{cell(lo)}, {cell(hi)}]"
+            lines.append(
+                f"{r.name[:28]:28s} {r.speed_mps:5.2f} {r.duration_s:5.1f} "
+                f"{cell(r.armse_m):>8s} {twins:>28s} {r.percentile:5.1f}  "
+                f"{'yes' if r.covered else 'no'}"
+            )
+        k, n = self.coverage
+        if n:
+            lo, hi = coverage_interval(k, n)
+            geo = self.ratio_geomean
+            lines.append(
+                f"covered {k}/{n} (exact 95 %: {100 * lo:.0f}–{100 * hi:.0f} %); twins' median "
+                f"/ recording: geometric mean {'n/a' if geo is None else f'{geo:.2f}'}; "
+                f"mean percentile {self.mean_percentile:.1f} (50 ± {28.9 / math.sqrt(n):.1f} "
+                "if the twins were the recordings' distribution)"
+            )
+        if self.not_checked:
+            lines.append(f"not checked (no dense truth): {', '.join(self.not_checked)}")
+        return "\n".join(lines)
+
+
+def twin_speed(speed_mps: float) -> tuple[float, float]:
+    """The twins' stride speed range for a recording walked at ``speed_mps``."""
+    lo = min(max(speed_mps * (1 - SPEED_SPREAD), SPEED_LIMITS_MPS[0]), SPEED_LIMITS_MPS[1])
+    hi = min(max(speed_mps * (1 + SPEED_SPREAD), SPEED_LIMITS_MPS[0]), SPEED_LIMITS_MPS[1])
+    return lo, hi
+
+
+def error_level(
+    recordings: Sequence[Recording],
+    model: SimModel,
+    walks: int = DEFAULT_WALKS,
+    seed: int = 0,
+    setup: RealFilterSetup | None = None,
+) -> ErrorLevelReport:
+    """The report of the module docstring for ``recordings`` and ``model``."""
+    if walks < 2:
+        raise ValueError(f"walks must be ≥ 2 (a spread of twins), got {walks}")
+    setup = setup or real_fixed_setup()
+    rows, not_checked = [], []
+    for r, rec in enumerate(recordings):
+        if not rec.has_truth or rec.footprints is not None:
+            not_checked.append(rec.name)
+            continue
+        speed = walk_stats(samples_from_recording(rec), per_stride=False).speed_mps
+        if not math.isfinite(speed):
+            not_checked.append(rec.name)
+            continue
+        duration = max(rec.duration_s, MIN_DURATION_S)
+        twins = simulated_recordings(
+            model, walks, 100_000 * seed + r, twin_speed(speed), (duration, duration)
+        )
+        errors = np.array([lane_errors(t, setup, {})[0] for t in twins])
+        own = float(lane_errors(rec, setup, {})[0])
+        rows.append(RecordingLevel(rec.name, speed, rec.duration_s, own, errors))
+    return ErrorLevelReport(model.name, walks, seed, rows, not_checked)

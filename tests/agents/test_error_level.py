@@ -1,0 +1,98 @@
+"""agents.error_level (``pednav sim2real --nav``): the per-recording figures on
+hand-built twins, the summary, the recordings it checks and skips, and the CLI."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from testdata import HALLWAY_DATA, PYSHOE_SAMPLE
+
+from agents.choose_shoe import errors_by_recording
+from agents.cli import main
+from agents.error_level import ErrorLevelReport, RecordingLevel, error_level, twin_speed
+from pednav_env.calibration.compare import MODELS
+from pednav_env.io import load_recording
+from pednav_env.replay.setup import real_fixed_setup
+
+TWINS = np.arange(1, 21) / 10.0  # 0.1 … 2.0 m
+
+
+def test_one_recording_against_hand_built_twins():
+    row = RecordingLevel("r", 1.0, 30.0, 0.15, TWINS)
+    # 5 % and 95 % of 20 sorted values: the 1st and the 19th; the median the 10th
+    assert row.envelope_m == (0.1, 1.9)
+    assert row.median_m == 1.0
+    assert row.covered
+    assert row.percentile == 5.0  # one twin below 0.15
+    assert row.ratio == pytest.approx(1.0 / 0.15)
+    assert not RecordingLevel("r", 1.0, 30.0, 0.05, TWINS).covered
+    assert not RecordingLevel("r", 1.0, 30.0, 1.95, TWINS).covered
+    tie = RecordingLevel("r", 1.0, 30.0, 1.0, TWINS)
+    assert tie.percentile == 47.5  # 9 below, one tie counted half
+
+
+def test_diverged_twins_are_infinite_errors():
+    twins = np.append(TWINS[:19], math.inf)
+    row = RecordingLevel("r", 1.0, 30.0, 5.0, twins)
+    assert row.envelope_m == (0.1, 1.9)
+    out = row.to_json()
+    assert out["twins_diverged"] == 1
+    assert out["twin_envelope_m"] == [0.1, 1.9]
+    late = RecordingLevel("r", 1.0, 30.0, 5.0, np.append(TWINS[:18], [math.inf, math.inf]))
+    assert late.envelope_m[1] == math.inf and late.covered
+    assert late.to_json()["twin_envelope_m"][1] is None
+
+
+def test_the_summary():
+    rows = [
+        RecordingLevel("a", 1.0, 30.0, 0.5, TWINS),  # median 1.0: ratio 2
+        RecordingLevel("b", 1.0, 30.0, 4.0, TWINS),  # ratio 0.25, not covered
+    ]
+    report = ErrorLevelReport("m", 20, 0, rows, ["fp"])
+    assert report.coverage == (1, 2)
+    assert report.ratio_geomean == pytest.approx(math.sqrt(2 * 0.25))
+    # a: 4 twins below 0.5 and one tie (22.5 %); b: all 20 below (100 %)
+    assert report.mean_percentile == pytest.approx((22.5 + 100.0) / 2)
+    out = report.to_json()
+    assert out["covered"] == 1 and out["recordings"] == 2 and out["not_checked"] == ["fp"]
+    text = report.format_text()
+    assert "covered 1/2" in text and "not checked (no dense truth): fp" in text
+
+
+def test_twin_speeds():
+    assert twin_speed(1.0) == pytest.approx((0.9, 1.1))
+    assert twin_speed(0.05) == (0.1, 0.1)
+    assert twin_speed(5.0) == (3.8, 3.8)
+
+
+def test_recordings_with_truth_get_twins_and_footprint_walks_are_listed():
+    rec = load_recording(PYSHOE_SAMPLE)
+    walk = load_recording(HALLWAY_DATA / "SensorConnectData_31_first5s.csv")
+    report = error_level([walk, rec], MODELS["calibrated"], walks=2, seed=3)
+    assert report.not_checked == [walk.name]
+    (row,) = report.rows
+    # the recording's own error is pednav run's
+    assert row.armse_m == pytest.approx(errors_by_recording(real_fixed_setup(), [rec])[rec.name])
+    assert row.twins_m.shape == (2,) and np.all(row.twins_m > 0)
+    assert row.duration_s == pytest.approx(rec.duration_s)
+    again = error_level([walk, rec], MODELS["calibrated"], walks=2, seed=3)
+    assert again.rows[0].twins_m.tolist() == row.twins_m.tolist()
+    other = error_level([walk, rec], MODELS["calibrated"], walks=2, seed=4)
+    assert other.rows[0].twins_m.tolist() != row.twins_m.tolist()
+    with pytest.raises(ValueError, match="walks must be ≥ 2"):
+        error_level([rec], MODELS["calibrated"], walks=1)
+
+
+def test_cli_nav(capsys: pytest.CaptureFixture[str]):
+    args = ["sim2real", str(PYSHOE_SAMPLE), "--walks", "2", "--nav", "--nav-walks", "2"]
+    assert main([*args, "--json"]) == 0
+    level = json.loads(capsys.readouterr().out)["error_level"]
+    assert level["recordings"] == 1 and level["walks"] == 2
+    assert main(args) == 0
+    assert "error level: real-fixed's PyShoe ARMSE" in capsys.readouterr().out
+    assert main(["sim2real", str(PYSHOE_SAMPLE), "--nav", "--nav-walks", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--nav-walks must be ≥ 2" in err and "\n" not in err
