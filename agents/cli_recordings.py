@@ -121,6 +121,15 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
         raise ValueError(f"--walks must be ≥ 2 (each band's spread), got {args.walks}")
     if args.nav_walks < 2:
         raise ValueError(f"--nav-walks must be ≥ 2 (a spread of twins), got {args.nav_walks}")
+    nav_setup = None
+    if args.nav:
+        from pednav_env.replay.setup import SETUP_NAMES, load_setup, named_setup
+
+        name = args.nav_setup
+        try:
+            nav_setup = named_setup(name) if name in SETUP_NAMES else load_setup(name)
+        except ValueError as exc:
+            raise ValueError(f"--nav-setup: {exc}") from None
     if args.plot is not None:
         output_dir(args.plot, "--plot")
     paths = []
@@ -153,7 +162,7 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
         from agents.error_level import error_level
 
         kept = [recording_of[id(w)] for w in walks]
-        level = error_level(kept, model, args.nav_walks, args.seed)
+        level = error_level(kept, model, args.nav_walks, args.seed, nav_setup, args.nav_setup)
     if args.json:
         out = report.to_json()
         if level is not None:
@@ -196,6 +205,13 @@ def _add_sim2real(sub: argparse._SubParsersAction) -> None:
         type=positive_int,
         default=20,
         help="simulated twins per recording for --nav, ≥ 2 (default 20)",
+    )
+    s2r.add_argument(
+        "--nav-setup",
+        metavar="NAME|FILE",
+        default="real-fixed",
+        help="the filter setup of --nav: real-fixed (default), paper, or a setup JSON file "
+        "as `pednav run --policy` reads (docs/REAL_DATA.md)",
     )
     s2r.add_argument("--json", action="store_true", help="print one JSON object")
     s2r.add_argument("--plot", metavar="DIR", default=None, help="write histograms to DIR")

@@ -5,8 +5,8 @@ The statistics of ``pednav sim2real`` compare signals; this compares what the si
 do to a filter. For every recording with a dense truth track (PyShoe's VICON trials, a
 generic CSV with positions; footprint-only walks are listed as not checked):
 
-- the recording's error: ``real-fixed``'s PyShoe ARMSE with ``pednav run``'s runner
-  (:func:`agents.choose_shoe.lane_errors`);
+- the recording's error: ``real-fixed``'s (or another setup's) PyShoe ARMSE with
+  ``pednav run``'s runner (:func:`agents.choose_shoe.lane_errors`);
 - its simulated twins: ``walks`` walks of the simulator model with every stride's speed
   within ±:data:`SPEED_SPREAD` of the recording's walking speed
   (:func:`pednav_env.calibration.stats.walk_stats`) and the recording's length, turns
@@ -117,6 +117,7 @@ class ErrorLevelReport:
     seed: int
     rows: list[RecordingLevel]
     not_checked: list[str]
+    setup: str = "real-fixed"
 
     @property
     def coverage(self) -> tuple[int, int]:
@@ -138,6 +139,7 @@ class ErrorLevelReport:
         lo, hi = coverage_interval(k, n) if n else (None, None)
         return {
             "model": self.model,
+            "setup": self.setup,
             "walks": self.walks,
             "seed": self.seed,
             "covered": k,
@@ -151,7 +153,7 @@ class ErrorLevelReport:
 
     def format_text(self) -> str:
         lines = [
-            f"error level: real-fixed's PyShoe ARMSE, each recording against {self.walks} "
+            f"error level: {self.setup}'s PyShoe ARMSE, each recording against {self.walks} "
             f"simulated twins ({self.model}; same speed ±{SPEED_SPREAD:.0%}, same length)",
             f"{'recording':28s} {'m/s':>5s} {'s':>5s} {'ARMSE m':>8s} "
             f"{'twins: median [5–95 %] m':>28s} {'pct':>5s}  covered",
@@ -196,8 +198,10 @@ def error_level(
     walks: int = DEFAULT_WALKS,
     seed: int = 0,
     setup: RealFilterSetup | None = None,
+    setup_name: str = "real-fixed",
 ) -> ErrorLevelReport:
-    """The report of the module docstring for ``recordings`` and ``model``."""
+    """The report of the module docstring for ``recordings`` and ``model``; ``setup``
+    (named ``setup_name``) instead of ``real-fixed``'s if given."""
     if walks < 2:
         raise ValueError(f"walks must be ≥ 2 (a spread of twins), got {walks}")
     setup = setup or real_fixed_setup()
@@ -217,4 +221,4 @@ def error_level(
         errors = np.array([lane_errors(t, setup, {})[0] for t in twins])
         own = float(lane_errors(rec, setup, {})[0])
         rows.append(RecordingLevel(rec.name, speed, rec.duration_s, own, errors))
-    return ErrorLevelReport(model.name, walks, seed, rows, not_checked)
+    return ErrorLevelReport(model.name, walks, seed, rows, not_checked, setup_name)

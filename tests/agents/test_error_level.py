@@ -15,7 +15,7 @@ from agents.cli import main
 from agents.error_level import ErrorLevelReport, RecordingLevel, error_level, twin_speed
 from pednav_env.calibration.compare import MODELS
 from pednav_env.io import load_recording
-from pednav_env.replay.setup import real_fixed_setup
+from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
 
 TWINS = np.arange(1, 21) / 10.0  # 0.1 … 2.0 m
 
@@ -96,3 +96,22 @@ def test_cli_nav(capsys: pytest.CaptureFixture[str]):
     assert main(["sim2real", str(PYSHOE_SAMPLE), "--nav", "--nav-walks", "1"]) == 2
     err = capsys.readouterr().err.strip()
     assert "--nav-walks must be ≥ 2" in err and "\n" not in err
+    assert main(["sim2real", str(PYSHOE_SAMPLE), "--nav", "--nav-setup", "nowhere.json"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--nav-setup: setup file nowhere.json not found" in err and "\n" not in err
+
+
+def test_cli_nav_setup(tmp_path, capsys: pytest.CaptureFixture[str]):
+    # another setup, from a file: its name in the report, its own error on the recording
+    high = real_fixed_setup().to_dict()
+    high["detector"]["threshold"] = 1.3e9
+    path = tmp_path / "high.json"
+    path.write_text(json.dumps(high))
+    args = ["sim2real", str(PYSHOE_SAMPLE), "--walks", "2", "--nav", "--nav-walks", "2"]
+    assert main([*args, "--nav-setup", str(path), "--json"]) == 0
+    level = json.loads(capsys.readouterr().out)["error_level"]
+    assert level["setup"] == str(path)
+    rec = load_recording(PYSHOE_SAMPLE)
+    own = errors_by_recording(RealFilterSetup.from_dict(high), [rec])[rec.name]
+    assert level["rows"][0]["armse_m"] == pytest.approx(own)
+    assert own != pytest.approx(errors_by_recording(real_fixed_setup(), [rec])[rec.name])

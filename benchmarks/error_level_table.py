@@ -1,0 +1,83 @@
+"""The error level (``pednav sim2real --nav``, :mod:`agents.error_level`) of several
+simulator models at several SHOE thresholds, on the PyShoe development trials
+(docs/SIM_TO_REAL.md, "The error level and where it comes from").
+
+Each trial against 20 simulated twins of its walking speed (±10 %) and length, per
+model; the filter is ``real-fixed``'s with its threshold γ replaced by each value of
+``--gammas`` (``real-fixed``'s own 2.25·10⁷ first). Per (model, γ): the trials covered
+by their twins' 5–95 % range, the geometric mean of twins' median over the trial's
+ARMSE, and the mean percentile (50 ± 6.0 for 23 trials if the twins were the trials'
+own distribution). Nothing is chosen on these runs.
+
+    PYTHONPATH=. .venv/bin/python benchmarks/error_level_table.py \\
+        --json benchmarks/results/error_level_table.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from agents.error_level import DEFAULT_WALKS, error_level
+from pednav_env.calibration.compare import MODELS, model_from_json
+from pednav_env.io import load_recording
+from pednav_env.replay.setup import real_fixed_setup
+
+#: Models: the shipped calibrated one, today's (before calibration), and the
+#: calibrated values with the opt-in heel rocker, unfitted and refitted (v4).
+MODEL_NAMES = (
+    "calibrated",
+    "today",
+    "benchmarks/results/calibrated_heel_rocker.json",
+    "benchmarks/results/calibrate_foot_v4.json",
+)
+GAMMAS = (2.25e7, 1.3e8, 1.3e9)
+
+
+def run(pyshoe: Path, gammas: tuple[float, ...], walks: int, seed: int) -> dict[str, Any]:
+    trials = [load_recording(p) for p in sorted(pyshoe.glob("*.mat"))]
+    base = real_fixed_setup()
+    out: dict[str, Any] = {"walks": walks, "seed": seed, "gammas": list(gammas), "rows": []}
+    for name in MODEL_NAMES:
+        model = MODELS[name] if name in MODELS else model_from_json(name)
+        for gamma in gammas:
+            detector = replace(base.filter.detector, threshold=gamma)
+            setup = replace(base, filter=replace(base.filter, detector=detector))
+            report = error_level(trials, model, walks, seed, setup, f"γ = {gamma:.3g}")
+            summary = report.to_json()
+            summary.pop("rows")
+            out["rows"].append({"model": name, "gamma": gamma, **summary})
+    return out
+
+
+def print_table(result: dict[str, Any]) -> None:
+    print(f"{'model':48s} {'γ':>8s} {'covered':>8s} {'median ratio':>13s} {'mean pct':>9s}")
+    for r in result["rows"]:
+        print(
+            f"{r['model']:48s} {r['gamma']:8.3g} {r['covered']:4d}/{r['recordings']:<3d} "
+            f"{r['ratio_geomean']:13.2f} {r['mean_percentile']:9.1f}"
+        )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--pyshoe", type=Path, default=Path("../shared/data/pyshoe-vicon-dev"))
+    parser.add_argument("--walks", type=int, default=DEFAULT_WALKS)
+    parser.add_argument("--seed", type=int, default=0, help="simulation seed (development)")
+    parser.add_argument("--json", type=Path, help="also write the result here")
+    parser.add_argument("--load", type=Path, help="a stored --json result: run nothing")
+    args = parser.parse_args()
+    if args.load:
+        result = json.loads(args.load.read_text())
+    else:
+        result = run(args.pyshoe, GAMMAS, args.walks, args.seed)
+    print_table(result)
+    if args.json:
+        args.json.write_text(json.dumps(result, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
