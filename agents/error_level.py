@@ -2,17 +2,20 @@
 docs/SIM_TO_REAL.md, "The error level and where it comes from").
 
 The statistics of ``pednav sim2real`` compare signals; this compares what the signals
-do to a filter. For every recording with a dense truth track (PyShoe's VICON trials, a
-generic CSV with positions; footprint-only walks are listed as not checked):
+do to a filter. For every recording with a truth track (PyShoe's VICON trials, a
+generic CSV with positions) or footprints (the hallway walks):
 
 - the recording's error: ``real-fixed``'s (or another setup's) PyShoe ARMSE with
-  ``pednav run``'s runner (:func:`agents.choose_shoe.lane_errors`);
+  ``pednav run``'s runner (:func:`agents.choose_shoe.lane_errors`), or with footprints
+  only its mean footprint error;
 - its simulated twins: ``walks`` walks of the simulator model with every stride's speed
   within ±:data:`SPEED_SPREAD` of the recording's walking speed
   (:func:`pednav_env.calibration.stats.walk_stats`) and the recording's length, turns
   and stops as the calibrated scenario draws them; recording r's walk i draws from
   ``numpy.random.default_rng([100000·seed + r, i])``; the same filter and measure
-  against the simulated truth;
+  against the simulated truth (for a footprint walk, footprints at the last sample of
+  each simulated stance, the truth dropped, so that the twins are scored by the
+  footprint error too);
 - *covered*: the recording's ARMSE inside the twins' 5–95 % range (order statistics; a
   diverged walk counts as an infinite error); its percentile among them; and the ratio
   of the twins' median to the recording's ARMSE.
@@ -27,17 +30,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.choose_shoe import lane_errors, simulated_recordings
+from agents.choose_shoe import lane_errors
 from pednav_env.calibration.compare import ENVELOPE_PERCENT, SimModel, coverage_interval
-from pednav_env.calibration.sources import samples_from_recording
+from pednav_env.calibration.sources import recording_from_simulation, samples_from_recording
 from pednav_env.calibration.stats import walk_stats
-from pednav_env.io import Recording
+from pednav_env.io import Footprints, Recording
 from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
 
 Array = NDArray[np.float64]
@@ -61,6 +64,7 @@ class RecordingLevel:
     duration_s: float
     armse_m: float
     twins_m: Array
+    measure: str = "PyShoe ARMSE"
 
     @property
     def envelope_m(self) -> tuple[float, float]:
@@ -97,6 +101,7 @@ class RecordingLevel:
         lo, hi = self.envelope_m
         return {
             "name": self.name,
+            "measure": self.measure,
             "speed_mps": self.speed_mps,
             "duration_s": self.duration_s,
             "armse_m": num(self.armse_m),
@@ -153,9 +158,10 @@ class ErrorLevelReport:
 
     def format_text(self) -> str:
         lines = [
-            f"error level: {self.setup}'s PyShoe ARMSE, each recording against {self.walks} "
+            f"error level: {self.setup}'s PyShoe ARMSE (footprint error for footprint walks), "
+            f"each recording against {self.walks} "
             f"simulated twins ({self.model}; same speed ±{SPEED_SPREAD:.0%}, same length)",
-            f"{'recording':28s} {'m/s':>5s} {'s':>5s} {'ARMSE m':>8s} "
+            f"{'recording':28s} {'m/s':>5s} {'s':>5s} {'error m':>8s} "
             f"{'twins: median [5–95 %] m':>28s} {'pct':>5s}  covered",
         ]
 
@@ -181,7 +187,9 @@ class ErrorLevelReport:
                 "if the twins were the recordings' distribution)"
             )
         if self.not_checked:
-            lines.append(f"not checked (no dense truth): {', '.join(self.not_checked)}")
+            lines.append(
+                f"not checked (no truth, no footprints or no speed): {', '.join(self.not_checked)}"
+            )
         return "\n".join(lines)
 
 
@@ -190,6 +198,29 @@ def twin_speed(speed_mps: float) -> tuple[float, float]:
     lo = min(max(speed_mps * (1 - SPEED_SPREAD), SPEED_LIMITS_MPS[0]), SPEED_LIMITS_MPS[1])
     hi = min(max(speed_mps * (1 + SPEED_SPREAD), SPEED_LIMITS_MPS[0]), SPEED_LIMITS_MPS[1])
     return lo, hi
+
+
+def twin_recordings(
+    model: SimModel,
+    walks: int,
+    seed: int,
+    speed_mps: tuple[float, float],
+    duration_s: float,
+    footprints: bool,
+) -> list[Recording]:
+    """``walks`` simulated twins (walk i from ``default_rng([seed, i])``) as recordings:
+    with their truth track, or with ``footprints`` footprints only (module docstring)."""
+    truth, imu = model.batch(speed_mps, walks, seed, (duration_s, duration_s))
+    out = []
+    for i in range(walks):
+        rec = recording_from_simulation(truth, imu, i, f"{model.name}-{seed}-{i}")
+        if footprints:
+            stance = truth.stance[i, : rec.num_samples]
+            last = np.flatnonzero(stance[:-1] & ~stance[1:])  # the last sample of a stance
+            marks = Footprints(last.astype(np.int64), rec.truth_pos[last, :2], rec.name)
+            rec = replace(rec, truth_pos=None, footprints=marks)
+        out.append(rec)
+    return out
 
 
 def error_level(
@@ -207,7 +238,8 @@ def error_level(
     setup = setup or real_fixed_setup()
     rows, not_checked = [], []
     for r, rec in enumerate(recordings):
-        if not rec.has_truth or rec.footprints is not None:
+        dense = rec.has_truth
+        if not dense and rec.footprints is None:
             not_checked.append(rec.name)
             continue
         speed = walk_stats(samples_from_recording(rec), per_stride=False).speed_mps
@@ -215,10 +247,11 @@ def error_level(
             not_checked.append(rec.name)
             continue
         duration = max(rec.duration_s, MIN_DURATION_S)
-        twins = simulated_recordings(
-            model, walks, 100_000 * seed + r, twin_speed(speed), (duration, duration)
+        twins = twin_recordings(
+            model, walks, 100_000 * seed + r, twin_speed(speed), duration, footprints=not dense
         )
         errors = np.array([lane_errors(t, setup, {})[0] for t in twins])
         own = float(lane_errors(rec, setup, {})[0])
-        rows.append(RecordingLevel(rec.name, speed, rec.duration_s, own, errors))
+        measure = "PyShoe ARMSE" if dense else "footprint error"
+        rows.append(RecordingLevel(rec.name, speed, rec.duration_s, own, errors, measure))
     return ErrorLevelReport(model.name, walks, seed, rows, not_checked, setup_name)

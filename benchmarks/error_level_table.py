@@ -1,8 +1,9 @@
 """The error level (``pednav sim2real --nav``, :mod:`agents.error_level`) of several
-simulator models at several SHOE thresholds, on the PyShoe development trials
-(docs/SIM_TO_REAL.md, "The error level and where it comes from").
+simulator models at several SHOE thresholds, on the 23 PyShoe development trials (PyShoe
+ARMSE) and the 8 hallway walks (``*_LLIO.mat``; mean footprint error)
+(docs/SIM_TO_REAL.md, "Matched twins").
 
-Each trial against 20 simulated twins of its walking speed (±10 %) and length, per
+Each recording against 20 simulated twins of its walking speed (±10 %) and length, per
 model; the filter is ``real-fixed``'s with its threshold γ replaced by each value of
 ``--gammas`` (``real-fixed``'s own 2.25·10⁷ first). Per (model, γ): the trials covered
 by their twins' 5–95 % range, the geometric mean of twins' median over the trial's
@@ -37,8 +38,13 @@ MODEL_NAMES = (
 GAMMAS = (2.25e7, 1.3e8, 1.3e9)
 
 
-def run(pyshoe: Path, gammas: tuple[float, ...], walks: int, seed: int) -> dict[str, Any]:
-    trials = [load_recording(p) for p in sorted(pyshoe.glob("*.mat"))]
+def run(
+    pyshoe: Path, hallway: Path, gammas: tuple[float, ...], walks: int, seed: int
+) -> dict[str, Any]:
+    sets = {
+        "PyShoe trials": [load_recording(p) for p in sorted(pyshoe.glob("*.mat"))],
+        "hallway walks": [load_recording(p) for p in sorted(hallway.glob("*_LLIO.mat"))],
+    }
     base = real_fixed_setup()
     out: dict[str, Any] = {"walks": walks, "seed": seed, "gammas": list(gammas), "rows": []}
     for name in MODEL_NAMES:
@@ -46,18 +52,23 @@ def run(pyshoe: Path, gammas: tuple[float, ...], walks: int, seed: int) -> dict[
         for gamma in gammas:
             detector = replace(base.filter.detector, threshold=gamma)
             setup = replace(base, filter=replace(base.filter, detector=detector))
-            report = error_level(trials, model, walks, seed, setup, f"γ = {gamma:.3g}")
-            summary = report.to_json()
-            summary.pop("rows")
-            out["rows"].append({"model": name, "gamma": gamma, **summary})
+            for set_name, recordings in sets.items():
+                report = error_level(recordings, model, walks, seed, setup, f"γ = {gamma:.3g}")
+                summary = report.to_json()
+                summary.pop("rows")
+                out["rows"].append({"set": set_name, "gamma": gamma, **summary})
     return out
 
 
 def print_table(result: dict[str, Any]) -> None:
-    print(f"{'model':48s} {'γ':>8s} {'covered':>8s} {'median ratio':>13s} {'mean pct':>9s}")
+    print(
+        f"{'set':14s} {'model':24s} {'γ':>8s} {'covered':>8s} {'median ratio':>13s} "
+        f"{'mean pct':>9s}"
+    )
     for r in result["rows"]:
         print(
-            f"{r['model']:48s} {r['gamma']:8.3g} {r['covered']:4d}/{r['recordings']:<3d} "
+            f"{r['set']:14s} {r['model']:24s} {r['gamma']:8.3g} "
+            f"{r['covered']:4d}/{r['recordings']:<3d} "
             f"{r['ratio_geomean']:13.2f} {r['mean_percentile']:9.1f}"
         )
 
@@ -65,6 +76,7 @@ def print_table(result: dict[str, Any]) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--pyshoe", type=Path, default=Path("../shared/data/pyshoe-vicon-dev"))
+    parser.add_argument("--hallway", type=Path, default=Path("../shared/data/hallway-gcp-dev"))
     parser.add_argument("--walks", type=int, default=DEFAULT_WALKS)
     parser.add_argument("--seed", type=int, default=0, help="simulation seed (development)")
     parser.add_argument("--json", type=Path, help="also write the result here")
@@ -73,7 +85,7 @@ def main() -> None:
     if args.load:
         result = json.loads(args.load.read_text())
     else:
-        result = run(args.pyshoe, GAMMAS, args.walks, args.seed)
+        result = run(args.pyshoe, args.hallway, GAMMAS, args.walks, args.seed)
     print_table(result)
     if args.json:
         args.json.write_text(json.dumps(result, indent=1) + "\n")

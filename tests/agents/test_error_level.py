@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,7 +13,13 @@ from testdata import HALLWAY_DATA, PYSHOE_SAMPLE
 
 from agents.choose_shoe import errors_by_recording
 from agents.cli import main
-from agents.error_level import ErrorLevelReport, RecordingLevel, error_level, twin_speed
+from agents.error_level import (
+    ErrorLevelReport,
+    RecordingLevel,
+    error_level,
+    twin_recordings,
+    twin_speed,
+)
 from pednav_env.calibration.compare import MODELS
 from pednav_env.io import load_recording
 from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
@@ -59,7 +66,7 @@ def test_the_summary():
     out = report.to_json()
     assert out["covered"] == 1 and out["recordings"] == 2 and out["not_checked"] == ["fp"]
     text = report.format_text()
-    assert "covered 1/2" in text and "not checked (no dense truth): fp" in text
+    assert "covered 1/2" in text and "not checked (no truth, no footprints or no speed): fp" in text
 
 
 def test_twin_speeds():
@@ -68,19 +75,43 @@ def test_twin_speeds():
     assert twin_speed(5.0) == (3.8, 3.8)
 
 
-def test_recordings_with_truth_get_twins_and_footprint_walks_are_listed():
-    rec = load_recording(PYSHOE_SAMPLE)
+def test_footprint_walks_get_footprint_twins_and_bare_walks_are_listed():
     walk = load_recording(HALLWAY_DATA / "SensorConnectData_31_first5s.csv")
-    report = error_level([walk, rec], MODELS["calibrated"], walks=2, seed=3)
-    assert report.not_checked == [walk.name]
+    bare = replace(load_recording(PYSHOE_SAMPLE), truth_pos=None)
+    report = error_level([bare, walk], MODELS["calibrated"], walks=2, seed=3)
+    assert report.not_checked == [bare.name]
     (row,) = report.rows
+    assert row.name == walk.name and row.measure == "footprint error"
+    assert row.armse_m == pytest.approx(errors_by_recording(real_fixed_setup(), [walk])[walk.name])
+    twins = twin_recordings(MODELS["calibrated"], 2, 1, (1.0, 1.1), 12.0, footprints=True)
+    for twin in twins:
+        # footprints at the last sample of each stance: the truth position there, and
+        # no truth track left
+        assert twin.truth_pos is None and twin.footprints is not None
+        assert len(twin.footprints.sample) >= 5
+    dense = twin_recordings(MODELS["calibrated"], 2, 1, (1.0, 1.1), 12.0, footprints=False)
+    for a, b in zip(twins, dense, strict=True):
+        np.testing.assert_array_equal(a.footprints.pos, b.truth_pos[a.footprints.sample, :2])
+        # the foot stands there: the sample before is within the stance micro-motion's
+        # fraction of a millimetre
+        np.testing.assert_allclose(
+            b.truth_pos[a.footprints.sample - 1, :2], a.footprints.pos, atol=1e-3
+        )
+
+
+def test_recordings_with_truth_get_twins():
+    rec = load_recording(PYSHOE_SAMPLE)
+    report = error_level([rec], MODELS["calibrated"], walks=2, seed=3)
+    assert report.not_checked == []
+    (row,) = report.rows
+    assert row.measure == "PyShoe ARMSE"
     # the recording's own error is pednav run's
     assert row.armse_m == pytest.approx(errors_by_recording(real_fixed_setup(), [rec])[rec.name])
     assert row.twins_m.shape == (2,) and np.all(row.twins_m > 0)
     assert row.duration_s == pytest.approx(rec.duration_s)
-    again = error_level([walk, rec], MODELS["calibrated"], walks=2, seed=3)
+    again = error_level([rec], MODELS["calibrated"], walks=2, seed=3)
     assert again.rows[0].twins_m.tolist() == row.twins_m.tolist()
-    other = error_level([walk, rec], MODELS["calibrated"], walks=2, seed=4)
+    other = error_level([rec], MODELS["calibrated"], walks=2, seed=4)
     assert other.rows[0].twins_m.tolist() != row.twins_m.tolist()
     with pytest.raises(ValueError, match="walks must be ≥ 2"):
         error_level([rec], MODELS["calibrated"], walks=1)
