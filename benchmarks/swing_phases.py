@@ -24,28 +24,20 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.sim_error_budget import arms
 from pednav_env.calibration.compare import SimModel
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import WalkSamples
 from pednav_env.calibration.swing_phases import swing_phase_profile
-from pednav_env.gait.stance_motion import StanceRandomization
 
 SPEED_MPS, DURATION_S, SEED = (0.3, 1.4), (30.0, 60.0), 22_600
 
 
 def models() -> dict[str, SimModel]:
-    calibrated = StanceRandomization.calibrated()
-    return {
-        "simulated, calibrated": SimModel("calibrated", "microstrain_gx5", calibrated),
-        "simulated, heel rocker": SimModel(
-            "heel rocker", "microstrain_gx5", replace(calibrated, heel_rocker=True)
-        ),
-        "simulated, heel rocker, monotone pitch": SimModel(
-            "heel rocker, monotone pitch",
-            "microstrain_gx5",
-            replace(calibrated, heel_rocker=True, monotone_pitch=True),
-        ),
-    }
+    """The arms of ``benchmarks/sim_error_budget.py`` this compares, named as simulated."""
+    budget = arms()
+    names = ("calibrated", "heel rocker", "heel rocker, monotone pitch")
+    return {f"simulated, {name}": budget[name] for name in names}
 
 
 def run(walks: int, seed: int, pyshoe: Path, truth_speed_stance: bool) -> dict[str, Any]:
