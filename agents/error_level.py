@@ -62,7 +62,7 @@ class RecordingLevel:
     name: str
     speed_mps: float
     duration_s: float
-    armse_m: float
+    error_m: float
     twins_m: Array
     measure: str = "PyShoe ARMSE"
 
@@ -81,18 +81,18 @@ class RecordingLevel:
     @property
     def covered(self) -> bool:
         lo, hi = self.envelope_m
-        return lo <= self.armse_m <= hi
+        return lo <= self.error_m <= hi
 
     @property
     def percentile(self) -> float:
         """Share of twins (%) with a smaller error than the recording (ties half)."""
-        below = np.sum(self.twins_m < self.armse_m) + 0.5 * np.sum(self.twins_m == self.armse_m)
+        below = np.sum(self.twins_m < self.error_m) + 0.5 * np.sum(self.twins_m == self.error_m)
         return float(100.0 * below / self.twins_m.size)
 
     @property
     def ratio(self) -> float:
         """Twins' median over the recording's error."""
-        return self.median_m / self.armse_m
+        return self.median_m / self.error_m
 
     def to_json(self) -> dict[str, Any]:
         def num(v: float) -> float | None:
@@ -104,7 +104,7 @@ class RecordingLevel:
             "measure": self.measure,
             "speed_mps": self.speed_mps,
             "duration_s": self.duration_s,
-            "armse_m": num(self.armse_m),
+            "error_m": num(self.error_m),
             "twins": int(self.twins_m.size),
             "twins_diverged": int(np.sum(~np.isfinite(self.twins_m))),
             "twin_median_m": num(self.median_m),
@@ -173,7 +173,7 @@ class ErrorLevelReport:
             twins = f"{cell(r.median_m)} [{cell(lo)}, {cell(hi)}]"
             lines.append(
                 f"{r.name[:28]:28s} {r.speed_mps:5.2f} {r.duration_s:5.1f} "
-                f"{cell(r.armse_m):>8s} {twins:>28s} {r.percentile:5.1f}  "
+                f"{cell(r.error_m):>8s} {twins:>28s} {r.percentile:5.1f}  "
                 f"{'yes' if r.covered else 'no'}"
             )
         k, n = self.coverage

@@ -82,7 +82,7 @@ def test_footprint_walks_get_footprint_twins_and_bare_walks_are_listed():
     assert report.not_checked == [bare.name]
     (row,) = report.rows
     assert row.name == walk.name and row.measure == "footprint error"
-    assert row.armse_m == pytest.approx(errors_by_recording(real_fixed_setup(), [walk])[walk.name])
+    assert row.error_m == pytest.approx(errors_by_recording(real_fixed_setup(), [walk])[walk.name])
     twins = twin_recordings(MODELS["calibrated"], 2, 1, (1.0, 1.1), 12.0, footprints=True)
     for twin in twins:
         # footprints at the last sample of each stance: the truth position there, and
@@ -106,7 +106,7 @@ def test_recordings_with_truth_get_twins():
     (row,) = report.rows
     assert row.measure == "PyShoe ARMSE"
     # the recording's own error is pednav run's
-    assert row.armse_m == pytest.approx(errors_by_recording(real_fixed_setup(), [rec])[rec.name])
+    assert row.error_m == pytest.approx(errors_by_recording(real_fixed_setup(), [rec])[rec.name])
     assert row.twins_m.shape == (2,) and np.all(row.twins_m > 0)
     assert row.duration_s == pytest.approx(rec.duration_s)
     again = error_level([rec], MODELS["calibrated"], walks=2, seed=3)
@@ -144,5 +144,5 @@ def test_cli_nav_setup(tmp_path, capsys: pytest.CaptureFixture[str]):
     assert level["setup"] == str(path)
     rec = load_recording(PYSHOE_SAMPLE)
     own = errors_by_recording(RealFilterSetup.from_dict(high), [rec])[rec.name]
-    assert level["rows"][0]["armse_m"] == pytest.approx(own)
+    assert level["rows"][0]["error_m"] == pytest.approx(own)
     assert own != pytest.approx(errors_by_recording(real_fixed_setup(), [rec])[rec.name])
