@@ -163,6 +163,12 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
 
         kept = [recording_of[id(w)] for w in walks]
         level = error_level(kept, model, args.nav_walks, args.seed, nav_setup, args.nav_setup)
+        if args.plot is not None:
+            from agents.error_level import write_figure
+
+            figure = write_figure(level, args.plot)
+            if figure is not None:
+                print(f"wrote {figure}", file=sys.stderr)
     if args.json:
         out = report.to_json()
         if level is not None:

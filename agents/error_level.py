@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -255,3 +256,58 @@ def error_level(
         measure = "PyShoe ARMSE" if dense else "footprint error"
         rows.append(RecordingLevel(rec.name, speed, rec.duration_s, own, errors, measure))
     return ErrorLevelReport(model.name, walks, seed, rows, not_checked, setup_name)
+
+
+def write_figure(report: ErrorLevelReport, directory: str | Path) -> Path | None:
+    """``error_level_<model>.png`` in ``directory``: per recording (sorted by speed, one
+    panel per measure), its twins' errors as dots, their 5–95 % range as a bar and the
+    recording's own error as a red diamond (hollow when outside the range), on a log
+    axis; diverged twins at the right edge. None when no recording was checked."""
+    if not report.rows:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    measures = sorted({r.measure for r in report.rows})
+    heights = [sum(r.measure == m for r in report.rows) for m in measures]
+    fig, axes = plt.subplots(
+        len(measures),
+        1,
+        figsize=(8.0, 1.2 + 0.28 * sum(heights)),
+        gridspec_kw={"height_ratios": heights},
+        squeeze=False,
+    )
+    finite = np.concatenate(
+        [r.twins_m[np.isfinite(r.twins_m)] for r in report.rows]
+        + [np.array([r.error_m]) for r in report.rows if math.isfinite(r.error_m)]
+    )
+    lo_x, hi_x = float(finite.min()) / 2, float(finite.max()) * 4
+    for ax, measure in zip(axes[:, 0], measures, strict=True):
+        rows = sorted((r for r in report.rows if r.measure == measure), key=lambda r: r.speed_mps)
+        for y, r in enumerate(rows):
+            twins = np.where(np.isfinite(r.twins_m), r.twins_m, hi_x / 1.5)
+            ax.scatter(twins, np.full(twins.size, y), s=8, color="0.55", zorder=2)
+            lo, hi = (min(v, hi_x / 1.5) for v in r.envelope_m)
+            ax.plot([lo, hi], [y, y], color="0.3", linewidth=2.5, alpha=0.5, zorder=1)
+            own = min(r.error_m, hi_x / 1.5)
+            face = "C3" if r.covered else "none"
+            ax.scatter([own], [y], s=60, marker="D", facecolor=face, edgecolor="C3", zorder=3)
+        ax.set_yticks(range(len(rows)))
+        ax.set_yticklabels([f"{r.name[:28]} ({r.speed_mps:.2f} m/s)" for r in rows], fontsize=7)
+        ax.set_xscale("log")
+        ax.set_xlim(lo_x, hi_x)
+        ax.set_xlabel(f"{measure} (m); right edge: diverged")
+        ax.grid(axis="x", alpha=0.3)
+    k, n = report.coverage
+    axes[0, 0].set_title(
+        f"{report.setup} on each recording (red) and {report.walks} twins ({report.model}): "
+        f"{k}/{n} inside their 5–95 %",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    path = Path(directory) / f"error_level_{report.model}.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -19,6 +19,7 @@ from agents.error_level import (
     error_level,
     twin_recordings,
     twin_speed,
+    write_figure,
 )
 from pednav_env.calibration.compare import MODELS
 from pednav_env.io import load_recording
@@ -117,13 +118,15 @@ def test_recordings_with_truth_get_twins():
         error_level([rec], MODELS["calibrated"], walks=1)
 
 
-def test_cli_nav(capsys: pytest.CaptureFixture[str]):
+def test_cli_nav(tmp_path, capsys: pytest.CaptureFixture[str]):
     args = ["sim2real", str(PYSHOE_SAMPLE), "--walks", "2", "--nav", "--nav-walks", "2"]
     assert main([*args, "--json"]) == 0
     level = json.loads(capsys.readouterr().out)["error_level"]
     assert level["recordings"] == 1 and level["walks"] == 2
     assert main(args) == 0
     assert "error level: real-fixed's PyShoe ARMSE" in capsys.readouterr().out
+    assert main([*args, "--plot", str(tmp_path)]) == 0
+    assert f"wrote {tmp_path / 'error_level_calibrated.png'}" in capsys.readouterr().err
     assert main(["sim2real", str(PYSHOE_SAMPLE), "--nav", "--nav-walks", "1"]) == 2
     err = capsys.readouterr().err.strip()
     assert "--nav-walks must be ≥ 2" in err and "\n" not in err
@@ -146,3 +149,15 @@ def test_cli_nav_setup(tmp_path, capsys: pytest.CaptureFixture[str]):
     own = errors_by_recording(RealFilterSetup.from_dict(high), [rec])[rec.name]
     assert level["rows"][0]["error_m"] == pytest.approx(own)
     assert own != pytest.approx(errors_by_recording(real_fixed_setup(), [rec])[rec.name])
+
+
+def test_the_figure(tmp_path):
+    rows = [
+        RecordingLevel("a", 1.0, 30.0, 0.5, TWINS),
+        RecordingLevel("b", 1.4, 30.0, 4.0, np.append(TWINS[:19], math.inf)),
+        RecordingLevel("c", 1.2, 60.0, 0.3, TWINS, "footprint error"),
+    ]
+    path = write_figure(ErrorLevelReport("m", 20, 0, rows, []), tmp_path)
+    assert path == tmp_path / "error_level_m.png"
+    assert path.stat().st_size > 10_000
+    assert write_figure(ErrorLevelReport("m", 20, 0, [], ["x"]), tmp_path / "none") is None
