@@ -27,13 +27,15 @@ from pednav_env.calibration.compare import MODELS, model_from_json
 from pednav_env.io import load_recording
 from pednav_env.replay.setup import real_fixed_setup
 
-#: Models: the shipped calibrated one, today's (before calibration), and the
-#: calibrated values with the opt-in heel rocker, unfitted and refitted (v4).
+#: Models: the shipped calibrated one, today's (before calibration), the calibrated
+#: values with the opt-in heel rocker, unfitted and refitted (v4), and with the
+#: heel-strike phase at 0.77 of heel-off (``heel_strike_scale``, not refitted).
 MODEL_NAMES = (
     "calibrated",
     "today",
     "benchmarks/results/calibrated_heel_rocker.json",
     "benchmarks/results/calibrate_foot_v4.json",
+    "benchmarks/results/calibrated_heel_strike_0.77.json",
 )
 GAMMAS = (2.25e7, 1.3e8, 1.3e9)
 

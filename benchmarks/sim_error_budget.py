@@ -16,6 +16,10 @@ and walkers; each arm changes one part):
   roll-over amplitudes at their floor (quiet and edge 10⁻⁷ rad, roll-over 0), every other
   walker value kept;
 - ``ideal IMU, no micro-motion``: both;
+- ``shorter heel strike``: the shipped model with the heel-strike phase at 0.77 of the
+  heel-off phase (``StanceRandomization.heel_strike_scale``; 0.23/0.30, the recorded
+  and simulated shares of the non-stance run after the pitch rate's last zero crossing),
+  not refitted;
 - ``heel rocker``: the shipped model with its opt-in heel rocker
   (``StanceRandomization.heel_rocker``: the heel comes to rest on its footfall instead of
   running past it and sliding back; docs/SIM_TO_REAL_CANDIDATES.md), not refitted.
@@ -78,6 +82,9 @@ def arms() -> dict[str, SimModel]:
             "heel rocker, monotone pitch",
             "microstrain_gx5",
             replace(calibrated, heel_rocker=True, monotone_pitch=True),
+        ),
+        "shorter heel strike": SimModel(
+            "shorter heel strike", "microstrain_gx5", replace(calibrated, heel_strike_scale=0.77)
         ),
     }
 

@@ -1,17 +1,19 @@
 """Where in the swing the foot moves fast without rotating, recorded and simulated
 (docs/SIM_TO_REAL.md, "The error level and where it comes from").
 
-Per tenth of the swing (:mod:`pednav_env.calibration.swing_phases`): the median foot
-speed, the median and 10th percentile of |ω|, and the share of samples faster than
-1 m/s turning slower than 1 rad/s. On the 23 PyShoe development trials (stance from
-their VICON labels, speed from VICON) and on simulated walks at the trials' speeds
-(0.3–1.4 m/s, 30–60 s, walk i from ``default_rng([seed, i])``; truth stance and speed):
-the shipped calibrated model, the same with its opt-in heel rocker, and with the heel
-rocker and the opt-in monotone swing pitch (``StanceMotion.monotone_pitch``). Nothing
-is chosen on these runs.
+Per phase bin of the swing (:mod:`pednav_env.calibration.swing_phases`; tenths unless
+``--bins``): the median foot speed, the median and 10th percentile of |ω|, the median
+signed sagittal rate, and the share of samples faster than 1 m/s turning slower than
+1 rad/s. On the 23 PyShoe development trials (stance from their VICON labels, speed
+from VICON) and on simulated walks at the trials' speeds (0.3–1.4 m/s, 30–60 s, walk i
+from ``default_rng([seed, i])``; truth stance and speed): the arms of
+``benchmarks/sim_error_budget.py`` named in :func:`models`. Nothing is chosen on these
+runs.
 
     PYTHONPATH=. .venv/bin/python benchmarks/swing_phases.py --walks 40 \\
         --json benchmarks/results/swing_phases.json --plot docs/figures/swing_phases.png
+    PYTHONPATH=. .venv/bin/python benchmarks/swing_phases.py --walks 40 --bins 20 \\
+        --json benchmarks/results/swing_phases_20.json
 """
 
 from __future__ import annotations
@@ -36,11 +38,13 @@ SPEED_MPS, DURATION_S, SEED = (0.3, 1.4), (30.0, 60.0), 22_600
 def models() -> dict[str, SimModel]:
     """The arms of ``benchmarks/sim_error_budget.py`` this compares, named as simulated."""
     budget = arms()
-    names = ("calibrated", "heel rocker", "heel rocker, monotone pitch")
+    names = ("calibrated", "heel rocker", "heel rocker, monotone pitch", "shorter heel strike")
     return {f"simulated, {name}": budget[name] for name in names}
 
 
-def run(walks: int, seed: int, pyshoe: Path, truth_speed_stance: bool) -> dict[str, Any]:
+def run(
+    walks: int, seed: int, pyshoe: Path, truth_speed_stance: bool, bins: int = 10
+) -> dict[str, Any]:
     """The profiles; ``truth_speed_stance``: every walk's stance from its truth speed
     (labels dropped; ``calibration.stats.truth_velocity_stance``), one rule for both."""
 
@@ -54,11 +58,11 @@ def run(walks: int, seed: int, pyshoe: Path, truth_speed_stance: bool) -> dict[s
         "stance": "truth speed" if truth_speed_stance else "labels / simulator truth",
     }
     trials = [stance_of(load_walk(p)) for p in sorted(pyshoe.glob("*.mat"))]
-    result["PyShoe trials"] = swing_phase_profile(trials)
+    result["PyShoe trials"] = swing_phase_profile(trials, bins)
     for name, model in models().items():
         truth, imu = model.batch(SPEED_MPS, walks, seed, DURATION_S)
         sims = [stance_of(samples_from_simulation(truth, imu, i)) for i in range(walks)]
-        result[name] = swing_phase_profile(sims)
+        result[name] = swing_phase_profile(sims, bins)
     return result
 
 
@@ -69,13 +73,13 @@ def profiles(result: dict[str, Any]) -> dict[str, dict[str, Any]]:
 def print_table(result: dict[str, Any]) -> None:
     for name, p in profiles(result).items():
         print(f"{name} ({p['swing_samples']} swing samples)")
-        print("  phase      speed m/s  |ω| median  |ω| p10  fast & still")
+        print("  phase      speed m/s  |ω| median  |ω| p10  sagittal  fast & still")
         edges = p["bin_edges"]
         for k in range(len(edges) - 1):
             print(
-                f"  {edges[k]:.1f}–{edges[k + 1]:.1f}   {p['speed_median_mps'][k]:9.2f}"
+                f"  {edges[k]:.2f}–{edges[k + 1]:.2f} {p['speed_median_mps'][k]:9.2f}"
                 f"  {p['rate_median_rad_s'][k]:10.2f}  {p['rate_p10_rad_s'][k]:7.2f}"
-                f"  {p['fast_still_share'][k]:12.3f}"
+                f"  {p['sagittal_rate_median_rad_s'][k]:8.2f}  {p['fast_still_share'][k]:12.3f}"
             )
 
 
@@ -91,10 +95,11 @@ def plot(result: dict[str, Any], path: Path) -> None:
         "simulated, calibrated": ("C3", "--", "o"),
         "simulated, heel rocker": ("C0", ":", "^"),
         "simulated, heel rocker, monotone pitch": ("C2", "-.", "v"),
+        "simulated, shorter heel strike": ("C1", "--", "x"),
     }
     panels = (
         ("speed_median_mps", "median foot speed (m/s)"),
-        ("rate_median_rad_s", "median |ω| (rad/s)"),
+        ("sagittal_rate_median_rad_s", "median sagittal rate (rad/s)"),
         ("fast_still_share", "share > 1 m/s and < 1 rad/s"),
     )
     for ax, (key, label) in zip(axes, panels, strict=True):
@@ -104,10 +109,12 @@ def plot(result: dict[str, Any], path: Path) -> None:
             mid = 0.5 * (edges[1:] + edges[:-1])
             values = np.array([np.nan if v is None else v for v in p[key]], dtype=float)
             ax.plot(mid, values, color=color, linestyle=line, marker=marker, label=name)
+        if key == "sagittal_rate_median_rad_s":
+            ax.axhline(0.0, color="0.5", linewidth=0.8)
         ax.set_xlabel("phase in the swing (0: stance ends, 1: next stance)")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
+    axes[2].legend(fontsize=7, loc="upper left")
     fig.suptitle(
         f"The swing at the PyShoe trials' speeds ({result['walks']} simulated walks per model)",
         fontsize=10,
@@ -120,6 +127,7 @@ def plot(result: dict[str, Any], path: Path) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--walks", type=int, default=40)
+    parser.add_argument("--bins", type=int, default=10, help="phase bins (default 10)")
     parser.add_argument("--seed", type=int, default=SEED, help="development seeds only")
     parser.add_argument("--pyshoe", type=Path, default=Path("../shared/data/pyshoe-vicon-dev"))
     parser.add_argument(
@@ -134,7 +142,7 @@ def main() -> None:
     result = (
         json.loads(args.load.read_text())
         if args.load
-        else run(args.walks, args.seed, args.pyshoe, args.truth_speed_stance)
+        else run(args.walks, args.seed, args.pyshoe, args.truth_speed_stance, args.bins)
     )
     print_table(result)
     if args.json:

@@ -15,8 +15,12 @@ the simulator's truth, cleaned as the statistics clean labels) lasting
 0 at the end of one stance and 1 at the start of the next. Per phase bin, over the
 swings of all walks given: the median truth foot speed
 (:func:`pednav_env.calibration.stats.truth_speed`), the median and 10th percentile of
-|ω|, and the share of samples that are *fast and still*: foot speed above
-:data:`FAST_MPS` and |ω| below :data:`STILL_RAD_S`. Samples without a truth speed
+|ω|, the median of the signed sagittal rate, and the share of samples that are *fast
+and still*: foot speed above :data:`FAST_MPS` and |ω| below :data:`STILL_RAD_S`. The
+sagittal rate is, per walk, the gyro axis with the largest variance over its swings,
+signed so that its median over the middle of the swing (phases 0.4–0.6, where the foot
+swings forward) is positive: sensor axes differ between recordings and the simulator,
+the swing's rotation does not. Samples without a truth speed
 (no reference, or inside a truth glitch,
 :func:`pednav_env.calibration.strides.truth_glitches`) are left out.
 """
@@ -48,10 +52,12 @@ MIN_SWING_S, MAX_SWING_S = 0.25, 1.5
 FAST_MPS, STILL_RAD_S = 1.0, 1.0
 
 
-def swing_samples(samples: WalkSamples) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(phase, foot speed m/s, |ω| rad/s)`` of the walk's swing samples (module
-    docstring); ValueError when the walk has no truth positions or its stance comes
-    from the detector rule (no labels, no truth stance)."""
+def swing_samples(
+    samples: WalkSamples,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(phase, foot speed m/s, |ω| rad/s, signed sagittal rate rad/s)`` of the walk's
+    swing samples (module docstring); ValueError when the walk has no truth positions
+    or its stance comes from the detector rule (no labels, no truth stance)."""
     s = samples
     if s.truth_pos is None:
         raise ValueError(f"{s.name}: swing phases need truth positions (the foot speed)")
@@ -64,7 +70,7 @@ def swing_samples(samples: WalkSamples) -> tuple[np.ndarray, np.ndarray, np.ndar
     for a, b in truth_glitches(s.truth_pos, rate):
         speed[a : b + 1] = np.nan
     rate_norm = np.linalg.norm(s.omega_b, axis=1)
-    phases, speeds, rates = [], [], []
+    phases, speeds, rates, axes = [], [], [], []
     for a, b in zip(*runs(walking & ~stance), strict=True):
         n = int(b - a)
         if not (MIN_SWING_S * rate <= n <= MAX_SWING_S * rate):
@@ -73,22 +79,29 @@ def swing_samples(samples: WalkSamples) -> tuple[np.ndarray, np.ndarray, np.ndar
         phases.append(((np.arange(n) + 0.5) / n)[ok])
         speeds.append(speed[a:b][ok])
         rates.append(rate_norm[a:b][ok])
+        axes.append(s.omega_b[a:b][ok])
     if not phases:
-        return np.zeros(0), np.zeros(0), np.zeros(0)
-    return np.concatenate(phases), np.concatenate(speeds), np.concatenate(rates)
+        return np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0)
+    phase, omega = np.concatenate(phases), np.concatenate(axes)
+    sagittal = omega[:, int(np.argmax(np.var(omega, axis=0)))]
+    middle = (phase > 0.4) & (phase < 0.6)
+    if middle.any() and np.median(sagittal[middle]) < 0:
+        sagittal = -sagittal
+    return phase, np.concatenate(speeds), np.concatenate(rates), sagittal
 
 
 def swing_phase_profile(walks: Sequence[WalkSamples], bins: int = 10) -> dict[str, Any]:
     """Per phase bin (``bins`` equal bins of [0, 1)) over the swings of ``walks``:
-    ``samples``, ``speed_median_mps``, ``rate_median_rad_s``, ``rate_p10_rad_s`` and
-    ``fast_still_share`` (lists, None where a bin is empty), with ``bin_edges`` and
-    ``swings_samples`` (the total)."""
+    ``samples``, ``speed_median_mps``, ``rate_median_rad_s``, ``rate_p10_rad_s``,
+    ``sagittal_rate_median_rad_s`` and ``fast_still_share`` (lists, None where a bin is
+    empty), with ``bin_edges`` and ``swing_samples`` (the total)."""
     if bins < 1:
         raise ValueError(f"bins must be ≥ 1, got {bins}")
     parts = [swing_samples(w) for w in walks]
     phase = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0)
     speed = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0)
     rate = np.concatenate([p[2] for p in parts]) if parts else np.zeros(0)
+    sagittal = np.concatenate([p[3] for p in parts]) if parts else np.zeros(0)
     index = np.minimum((phase * bins).astype(int), bins - 1)
     out: dict[str, Any] = {
         "bin_edges": np.linspace(0.0, 1.0, bins + 1).tolist(),
@@ -97,6 +110,7 @@ def swing_phase_profile(walks: Sequence[WalkSamples], bins: int = 10) -> dict[st
         "speed_median_mps": [],
         "rate_median_rad_s": [],
         "rate_p10_rad_s": [],
+        "sagittal_rate_median_rad_s": [],
         "fast_still_share": [],
     }
     for k in range(bins):
@@ -106,6 +120,7 @@ def swing_phase_profile(walks: Sequence[WalkSamples], bins: int = 10) -> dict[st
         out["speed_median_mps"].append(None if empty else float(np.median(speed[m])))
         out["rate_median_rad_s"].append(None if empty else float(np.median(rate[m])))
         out["rate_p10_rad_s"].append(None if empty else float(np.percentile(rate[m], 10)))
+        out["sagittal_rate_median_rad_s"].append(None if empty else float(np.median(sagittal[m])))
         still = (speed[m] > FAST_MPS) & (rate[m] < STILL_RAD_S)
         out["fast_still_share"].append(None if empty else float(still.mean()))
     return out

@@ -130,7 +130,8 @@ def speed_stride_shape(
             t0, t1, t2, t3 = a * cycle, (0.5 - a) * cycle, a * cycle, (0.5 - a) * cycle
         else:
             flat, heel, swing = walker.cycle_fractions(speed, a - _MID_STANCE_SHARE)
-            t0, t1, t2, t3 = flat * cycle, heel * cycle, swing * cycle, heel * cycle
+            strike = heel * walker.heel_strike_scale
+            t0, t1, t2, t3 = flat * cycle, heel * cycle, swing * cycle, strike * cycle
         height = 0.06 + 0.04 * shape_speed + d_height
         toe_off, heel_strike = 0.4 + 0.3 * shape_speed + d_toe_off, -(0.2 + 0.1 * shape_speed)
     k = 1.0 if walker is None else walker.swing_scale(speed)

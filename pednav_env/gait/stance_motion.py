@@ -53,6 +53,11 @@ knot and stays there while the foot rotates down about it
 footfall and slides back (docs/SIM_TO_REAL_CANDIDATES.md, "The heel that ran past
 its footfall").
 
+``heel_strike_scale`` (1 by default) sets the heel-strike phase's share of a walking
+cycle to heel-off's × the scale, the swing taking the difference (the recorded foot
+rolls down after heel strike for less of the cycle than the simulated one;
+docs/SIM_TO_REAL.md, "The error level and where it comes from").
+
 ``monotone_pitch`` (off by default) makes the swing's pitch monotone between its knots
 (stance, toe-off, mid-swing, heel strike, next stance;
 :func:`pednav_env.gait.splines.monotone_clamped_cubic_coefficients`, Fritsch & Carlson
@@ -140,6 +145,12 @@ def check_cadence_law(owner: str, intercept_hz: float | None, slope_hz_per_mps: 
             )
 
 
+def check_heel_strike_scale(owner: str, scale: float) -> None:
+    """ValueError unless the heel-strike share's factor is in [0.25, 2]."""
+    if not (isinstance(scale, int | float) and math.isfinite(scale) and 0.25 <= scale <= 2.0):
+        raise ValueError(f"{owner}.heel_strike_scale must be in [0.25, 2], got {scale!r}")
+
+
 @dataclass(frozen=True)
 class StanceMotion:
     """One walker's stance dynamics (module docstring); angles in rad at 1 m/s."""
@@ -165,6 +176,7 @@ class StanceMotion:
     cadence_slope_hz_per_mps: float = DEFAULT_CADENCE[1]
     pitch_knot_stride_m: float = 0.0
     monotone_pitch: bool = False
+    heel_strike_scale: float = 1.0
 
     def __post_init__(self) -> None:
         for flag in ("heel_rocker", "monotone_pitch"):
@@ -172,6 +184,7 @@ class StanceMotion:
                 raise ValueError(
                     f"StanceMotion.{flag} must be True or False, got {getattr(self, flag)!r}"
                 )
+        check_heel_strike_scale("StanceMotion", self.heel_strike_scale)
         check_pitch_knot_stride("StanceMotion", self.pitch_knot_stride_m)
         check_cadence_law("StanceMotion", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps)
         for name in ("quiet_rad", "edge_rad", "roll_rad", "stance_spread_log10"):
@@ -257,16 +270,18 @@ class StanceMotion:
         return self.swing_pitch_scale * max(speed_mps, 1e-3) ** self.swing_speed_exponent
 
     def cycle_fractions(self, speed_mps: float, jitter: float = 0.0) -> tuple[float, float, float]:
-        """Shares of a walking cycle at ``speed_mps`` (m/s): (foot flat, each of heel-off
-        and heel-strike, swing). Foot flat is ``flat_fraction + flat_speed_slope ·
-        ln v + jitter``, kept in [:data:`MIN_FLAT`, 1 − 2·heel − :data:`MIN_SWING`];
+        """Shares of a walking cycle at ``speed_mps`` (m/s): (foot flat, heel-off,
+        swing); heel strike takes heel-off's share × ``heel_strike_scale`` (1: the two
+        are equal). Foot flat is ``flat_fraction + flat_speed_slope · ln v + jitter``,
+        kept in [:data:`MIN_FLAT`, 1 − heel-off − heel strike − :data:`MIN_SWING`];
         swing is the rest. Requires ``flat_fraction``."""
         if self.flat_fraction is None:
             raise ValueError("StanceMotion.cycle_fractions needs flat_fraction")
         heel = self.heel_fraction
+        both = heel * (1.0 + self.heel_strike_scale)
         flat = self.flat_fraction + self.flat_speed_slope * math.log(max(speed_mps, 1e-3))
-        flat = min(max(flat + jitter, MIN_FLAT), 1.0 - 2.0 * heel - MIN_SWING)
-        return flat, heel, 1.0 - flat - 2.0 * heel
+        flat = min(max(flat + jitter, MIN_FLAT), 1.0 - both - MIN_SWING)
+        return flat, heel, 1.0 - flat - both
 
 
 def stance_table(motion: StanceMotion, speed_mps: Array) -> Array:
@@ -370,6 +385,7 @@ class StanceRandomization:
     cadence_log10_std: float = 0.0
     pitch_knot_stride_m: float = 0.0
     monotone_pitch: bool = False
+    heel_strike_scale: float = 1.0
 
     def __post_init__(self) -> None:
         for flag in ("heel_rocker", "monotone_pitch"):
@@ -377,6 +393,7 @@ class StanceRandomization:
                 raise ValueError(
                     f"StanceRandomization.{flag} must be True or False, got {getattr(self, flag)!r}"
                 )
+        check_heel_strike_scale("StanceRandomization", self.heel_strike_scale)
         check_pitch_knot_stride("StanceRandomization", self.pitch_knot_stride_m)
         check_cadence_law(
             "StanceRandomization", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps
@@ -460,6 +477,7 @@ class StanceRandomization:
             heel_rocker=self.heel_rocker,
             pitch_knot_stride_m=self.pitch_knot_stride_m,
             monotone_pitch=self.monotone_pitch,
+            heel_strike_scale=self.heel_strike_scale,
             **self._draw_gait(rng),
             **self._draw_cadence(rng),
         )

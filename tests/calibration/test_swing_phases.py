@@ -37,10 +37,12 @@ def walk(truth: bool = True, labels: bool = True) -> WalkSamples:
 
 
 def test_one_swing_at_its_phases():
-    phase, speed, rate = swing_samples(walk())
+    phase, speed, rate, sagittal = swing_samples(walk())
     assert phase.size == 100  # the 0.1 s flicker is not a swing
     assert phase[0] == pytest.approx(0.005) and phase[-1] == pytest.approx(0.995)
     assert rate[:50].tolist() == [3.0] * 50 and rate[50:].tolist() == [0.5] * 50
+    # ω about x only: the sagittal axis; signed positive over the middle (+3 then +0.5)
+    assert sagittal.tolist() == rate.tolist()
     assert np.median(speed[5:45]) == pytest.approx(4.0)
     assert np.median(speed[55:95]) == pytest.approx(2.0)
 
@@ -51,6 +53,7 @@ def test_profile_per_bin():
     assert p["samples"] == [20] * 10
     assert p["fast_still_share"] == [0.0] * 5 + [1.0] * 5
     assert p["rate_median_rad_s"] == [3.0] * 5 + [0.5] * 5
+    assert p["sagittal_rate_median_rad_s"] == [3.0] * 5 + [0.5] * 5
     assert p["speed_median_mps"][2] == pytest.approx(4.0)
     assert p["speed_median_mps"][7] == pytest.approx(2.0)
     two = swing_phase_profile([walk()], bins=2)
@@ -67,3 +70,14 @@ def test_refusals():
         swing_samples(sparse)
     with pytest.raises(ValueError, match="bins must be"):
         swing_phase_profile([walk()], bins=0)
+
+
+def test_the_sagittal_rate_is_signed_by_the_middle_of_the_swing():
+    # the same walk turning the other way about x, and a small rate about y: the
+    # sagittal axis is still x, and its sign makes the middle of the swing positive
+    omega_b, f_b, stance, pos = phase_walk(PHASES)
+    omega_b[:, 0] *= -1.0
+    omega_b[:, 1] = 0.1
+    w = WalkSamples(omega_b, f_b, RATE, "flipped", stance=stance, truth_pos=pos)
+    _, _, _, sagittal = swing_samples(w)
+    assert sagittal.tolist() == [3.0] * 50 + [0.5] * 50
