@@ -362,14 +362,18 @@ def _os_error_message(exc: OSError) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one subcommand. Bad input (a ValueError) is one line on stderr and exit code 2;
     a failed read or write (an OSError the up-front checks could not foresee: a full disk,
-    a file removed mid-run) one line naming the file and exit code 1. Either way, and on
-    Ctrl-C (re-raised), output directories the command created and left empty are removed
+    a file removed mid-run) one line naming the file and exit code 1. Either way, on any
+    other non-zero exit code and on Ctrl-C (re-raised), output directories the command
+    created and left empty are removed
     (:func:`agents.cli_types.removing_created_dirs_on_failure`)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        with removing_created_dirs_on_failure():
-            return int(args.func(args))
+        with removing_created_dirs_on_failure() as remove_created:
+            code = int(args.func(args))
+            if code != 0:  # failed without an exception (e.g. run DIR, every recording bad)
+                remove_created()
+            return code
     except ValueError as exc:
         print(f"pednav: error: {exc}", file=sys.stderr)
         return 2

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import argparse
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -74,16 +74,17 @@ def output_dir(path: str | Path, option: str) -> Path:
 
 
 @contextmanager
-def removing_created_dirs_on_failure() -> Iterator[None]:
+def removing_created_dirs_on_failure() -> Iterator[Callable[[], None]]:
     """Run a command; if it raises (any exception, KeyboardInterrupt included), remove
     the directories :func:`output_dir` created meanwhile (with their created parents)
     that are still empty, deepest first, then re-raise. Directories that existed
     before, or that hold anything, are left as they are (``rmdir``, never a recursive
-    delete)."""
+    delete). The value yielded removes them the same way without an exception: for a
+    command that fails by its exit code."""
     created: list[Path] = []
     _open_registries.append(created)
     try:
-        yield
+        yield lambda: _remove_empty(reversed(created))
     except BaseException:
         _remove_empty(reversed(created))
         raise

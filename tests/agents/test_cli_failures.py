@@ -102,3 +102,17 @@ def test_output_dir_removes_the_parents_it_made_when_the_directory_cannot_be_mad
     with pytest.raises(ValueError, match="cannot create the directory"):
         output_dir(target, "--out")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_run_that_fails_by_its_exit_code_removes_its_empty_directories(tmp_path, capsys):
+    # pednav run DIR exits 1 when recordings fail; with every one failing, the --plot and
+    # --out directories it made hold nothing and go
+    recordings = tmp_path / "recs"
+    recordings.mkdir()
+    (recordings / "broken.csv").write_text("time,gyro_x\n0,oops\n")
+    plots, out = tmp_path / "new" / "figs", tmp_path / "made" / "out"
+    code = main(["run", str(recordings), "--plot", str(plots), "--out", str(out)])
+    assert code == 1
+    assert "broken.csv" in capsys.readouterr().out
+    assert not (tmp_path / "new").exists() and not (tmp_path / "made").exists()
+    assert recordings.exists()
