@@ -20,6 +20,9 @@ and walkers; each arm changes one part):
   heel-off phase (``StanceRandomization.heel_strike_scale``; 0.23/0.30, the recorded
   and simulated shares of the non-stance run after the pitch rate's last zero crossing),
   not refitted;
+- ``mid pitch at the midpoint``: the shipped model with each walking stride's mid-swing
+  pitch knot at the midpoint of its toe-off and heel-strike knots
+  (``StanceRandomization.mid_pitch_midpoint``), not refitted;
 - ``heel rocker``: the shipped model with its opt-in heel rocker
   (``StanceRandomization.heel_rocker``: the heel comes to rest on its footfall instead of
   running past it and sliding back; docs/SIM_TO_REAL_CANDIDATES.md), not refitted.
@@ -85,6 +88,11 @@ def arms() -> dict[str, SimModel]:
         ),
         "shorter heel strike": SimModel(
             "shorter heel strike", "microstrain_gx5", replace(calibrated, heel_strike_scale=0.77)
+        ),
+        "mid pitch at the midpoint": SimModel(
+            "mid pitch at the midpoint",
+            "microstrain_gx5",
+            replace(calibrated, mid_pitch_midpoint=True),
         ),
     }
 

@@ -3,12 +3,12 @@
 
 Per phase bin of the swing (:mod:`pednav_env.calibration.swing_phases`; tenths unless
 ``--bins``): the median foot speed, the median and 10th percentile of |ω|, the median
-signed sagittal rate, and the share of samples faster than 1 m/s turning slower than
-1 rad/s. On the 23 PyShoe development trials (stance from their VICON labels, speed
-from VICON) and on simulated walks at the trials' speeds (0.3–1.4 m/s, 30–60 s, walk i
-from ``default_rng([seed, i])``; truth stance and speed): the arms of
-``benchmarks/sim_error_budget.py`` named in :func:`models`. Nothing is chosen on these
-runs.
+signed sagittal rate and off-sagittal rate, and the share of samples faster than 1 m/s
+turning slower than 1 rad/s. On the 23 PyShoe development trials (stance from their
+VICON labels, speed from VICON) and on simulated walks at the trials' speeds
+(0.3–1.4 m/s, 30–60 s, walk i from ``default_rng([seed, i])``; truth stance and speed):
+the arms of ``benchmarks/sim_error_budget.py`` named in :func:`models`. Nothing is
+chosen on these runs.
 
     PYTHONPATH=. .venv/bin/python benchmarks/swing_phases.py --walks 40 \\
         --json benchmarks/results/swing_phases.json --plot docs/figures/swing_phases.png
@@ -38,7 +38,13 @@ SPEED_MPS, DURATION_S, SEED = (0.3, 1.4), (30.0, 60.0), 22_600
 def models() -> dict[str, SimModel]:
     """The arms of ``benchmarks/sim_error_budget.py`` this compares, named as simulated."""
     budget = arms()
-    names = ("calibrated", "heel rocker", "heel rocker, monotone pitch", "shorter heel strike")
+    names = (
+        "calibrated",
+        "heel rocker",
+        "heel rocker, monotone pitch",
+        "shorter heel strike",
+        "mid pitch at the midpoint",
+    )
     return {f"simulated, {name}": budget[name] for name in names}
 
 
@@ -73,13 +79,14 @@ def profiles(result: dict[str, Any]) -> dict[str, dict[str, Any]]:
 def print_table(result: dict[str, Any]) -> None:
     for name, p in profiles(result).items():
         print(f"{name} ({p['swing_samples']} swing samples)")
-        print("  phase      speed m/s  |ω| median  |ω| p10  sagittal  fast & still")
+        print("  phase      speed m/s  |ω| median  |ω| p10  sagittal  off-sag.  fast & still")
         edges = p["bin_edges"]
         for k in range(len(edges) - 1):
             print(
                 f"  {edges[k]:.2f}–{edges[k + 1]:.2f} {p['speed_median_mps'][k]:9.2f}"
                 f"  {p['rate_median_rad_s'][k]:10.2f}  {p['rate_p10_rad_s'][k]:7.2f}"
-                f"  {p['sagittal_rate_median_rad_s'][k]:8.2f}  {p['fast_still_share'][k]:12.3f}"
+                f"  {p['sagittal_rate_median_rad_s'][k]:8.2f}"
+                f"  {p['off_sagittal_rate_median_rad_s'][k]:8.2f}  {p['fast_still_share'][k]:12.3f}"
             )
 
 
@@ -89,17 +96,20 @@ def plot(result: dict[str, Any], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 3, figsize=(13.5, 3.9))
+    fig, grid = plt.subplots(2, 2, figsize=(11.0, 7.6))
+    axes = grid.ravel()
     styles = {
         "PyShoe trials": ("k", "-", "s"),
         "simulated, calibrated": ("C3", "--", "o"),
         "simulated, heel rocker": ("C0", ":", "^"),
         "simulated, heel rocker, monotone pitch": ("C2", "-.", "v"),
         "simulated, shorter heel strike": ("C1", "--", "x"),
+        "simulated, mid pitch at the midpoint": ("C4", ":", "+"),
     }
     panels = (
         ("speed_median_mps", "median foot speed (m/s)"),
         ("sagittal_rate_median_rad_s", "median sagittal rate (rad/s)"),
+        ("off_sagittal_rate_median_rad_s", "median off-sagittal rate (rad/s)"),
         ("fast_still_share", "share > 1 m/s and < 1 rad/s"),
     )
     for ax, (key, label) in zip(axes, panels, strict=True):
@@ -114,7 +124,7 @@ def plot(result: dict[str, Any], path: Path) -> None:
         ax.set_xlabel("phase in the swing (0: stance ends, 1: next stance)")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-    axes[2].legend(fontsize=7, loc="upper left")
+    axes[3].legend(fontsize=7, loc="upper left")
     fig.suptitle(
         f"The swing at the PyShoe trials' speeds ({result['walks']} simulated walks per model)",
         fontsize=10,

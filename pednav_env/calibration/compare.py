@@ -396,14 +396,14 @@ MODELS = {
 #: Keys a fitted-parameter file may hold beside the StanceRandomization fields.
 _MODEL_FILE_KEYS = ("imu_grade",)
 #: StanceRandomization fields a fitted-parameter file gives as true or false.
-_MODEL_FILE_FLAGS = ("heel_rocker", "monotone_pitch")
+_MODEL_FILE_FLAGS = ("heel_rocker", "monotone_pitch", "mid_pitch_midpoint")
 
 
 def model_from_json(path: str | Path) -> SimModel:
     """A simulator model from a fitted-parameter JSON file (``pednav sim2real
     --model PATH``): an object of :class:`StanceRandomization` fields (numbers;
-    ``flat_fraction`` and ``cadence_intercept_hz`` may be null; ``heel_rocker`` and
-    ``monotone_pitch`` true or false), optionally
+    ``flat_fraction`` and ``cadence_intercept_hz`` may be null; ``heel_rocker``,
+    ``monotone_pitch`` and ``mid_pitch_midpoint`` true or false), optionally
     ``imu_grade`` (default the recordings' ``microstrain_gx5``), or a
     ``benchmarks/calibrate_foot.py`` output,
     whose top-level ``randomization`` is that object. Fields left out take

@@ -17,10 +17,11 @@ swings of all walks given: the median truth foot speed
 (:func:`pednav_env.calibration.stats.truth_speed`), the median and 10th percentile of
 |ω|, the median of the signed sagittal rate, and the share of samples that are *fast
 and still*: foot speed above :data:`FAST_MPS` and |ω| below :data:`STILL_RAD_S`. The
-sagittal rate is, per walk, the gyro axis with the largest variance over its swings,
-signed so that its median over the middle of the swing (phases 0.4–0.6, where the foot
-swings forward) is positive: sensor axes differ between recordings and the simulator,
-the swing's rotation does not. Samples without a truth speed
+sagittal rate is, per walk, ω along the principal direction of its swings' angular
+rates (the unit vector of largest variance, whatever the sensor's mounting), signed so
+that its median over the middle of the swing (phases 0.4–0.6, where the foot swings
+forward) is positive; the off-sagittal rate is the magnitude of the rest,
+√(|ω|² − sagittal²), the foot's turning about the other two axes. Samples without a truth speed
 (no reference, or inside a truth glitch,
 :func:`pednav_env.calibration.strides.truth_glitches`) are left out.
 """
@@ -83,7 +84,8 @@ def swing_samples(
     if not phases:
         return np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0)
     phase, omega = np.concatenate(phases), np.concatenate(axes)
-    sagittal = omega[:, int(np.argmax(np.var(omega, axis=0)))]
+    _, _, principal = np.linalg.svd(omega - omega.mean(axis=0), full_matrices=False)
+    sagittal = omega @ principal[0]
     middle = (phase > 0.4) & (phase < 0.6)
     if middle.any() and np.median(sagittal[middle]) < 0:
         sagittal = -sagittal
@@ -93,8 +95,9 @@ def swing_samples(
 def swing_phase_profile(walks: Sequence[WalkSamples], bins: int = 10) -> dict[str, Any]:
     """Per phase bin (``bins`` equal bins of [0, 1)) over the swings of ``walks``:
     ``samples``, ``speed_median_mps``, ``rate_median_rad_s``, ``rate_p10_rad_s``,
-    ``sagittal_rate_median_rad_s`` and ``fast_still_share`` (lists, None where a bin is
-    empty), with ``bin_edges`` and ``swing_samples`` (the total)."""
+    ``sagittal_rate_median_rad_s``, ``off_sagittal_rate_median_rad_s`` and
+    ``fast_still_share`` (lists, None where a bin is empty), with ``bin_edges`` and
+    ``swing_samples`` (the total)."""
     if bins < 1:
         raise ValueError(f"bins must be ≥ 1, got {bins}")
     parts = [swing_samples(w) for w in walks]
@@ -102,6 +105,7 @@ def swing_phase_profile(walks: Sequence[WalkSamples], bins: int = 10) -> dict[st
     speed = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0)
     rate = np.concatenate([p[2] for p in parts]) if parts else np.zeros(0)
     sagittal = np.concatenate([p[3] for p in parts]) if parts else np.zeros(0)
+    off = np.sqrt(np.maximum(rate**2 - sagittal**2, 0.0))
     index = np.minimum((phase * bins).astype(int), bins - 1)
     out: dict[str, Any] = {
         "bin_edges": np.linspace(0.0, 1.0, bins + 1).tolist(),
@@ -111,6 +115,7 @@ def swing_phase_profile(walks: Sequence[WalkSamples], bins: int = 10) -> dict[st
         "rate_median_rad_s": [],
         "rate_p10_rad_s": [],
         "sagittal_rate_median_rad_s": [],
+        "off_sagittal_rate_median_rad_s": [],
         "fast_still_share": [],
     }
     for k in range(bins):
@@ -121,6 +126,7 @@ def swing_phase_profile(walks: Sequence[WalkSamples], bins: int = 10) -> dict[st
         out["rate_median_rad_s"].append(None if empty else float(np.median(rate[m])))
         out["rate_p10_rad_s"].append(None if empty else float(np.percentile(rate[m], 10)))
         out["sagittal_rate_median_rad_s"].append(None if empty else float(np.median(sagittal[m])))
+        out["off_sagittal_rate_median_rad_s"].append(None if empty else float(np.median(off[m])))
         still = (speed[m] > FAST_MPS) & (rate[m] < STILL_RAD_S)
         out["fast_still_share"].append(None if empty else float(still.mean()))
     return out

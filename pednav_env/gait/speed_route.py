@@ -85,6 +85,8 @@ _WALK_BOUNDS = (
 )
 #: Middle of the walking stance share's range (0.30–0.38).
 _MID_STANCE_SHARE = 0.34
+#: Mean of the walking mid-swing pitch draw (rad; WALK_DRAWS' (−0.1, 0.2)).
+_MID_PITCH_DRAW_MEAN = 0.05
 #: Largest swing pitch knot (rad) a walker's ``swing_pitch_scale`` reaches
 #: (StrideShape accepts angles below 1.4 rad).
 MAX_SWING_PITCH_RAD = 1.35
@@ -109,8 +111,10 @@ def speed_stride_shape(
     :data:`MAX_SWING_PITCH_RAD`). A ``walker`` with a ``pitch_knot_stride_m`` L_k
     then multiplies the toe-off, mid-swing and heel-strike pitch knots by
     min(1, L / L_k), L the stride's length
-    (:meth:`StanceMotion.pitch_knot_factor`). The draws from
-    ``rng`` are the same with or without a walker."""
+    (:meth:`StanceMotion.pitch_knot_factor`). A ``walker`` with ``mid_pitch_midpoint``
+    puts a walking stride's mid-swing pitch knot at the midpoint of its toe-off and
+    heel-strike knots, with the drawn jitter about it (before the swing scale). The
+    draws from ``rng`` are the same with or without a walker."""
     if gait is Gait.RUN:
         cycle, stance_frac, height, toe_off, heel_strike, pitch, roll = rng.uniform(
             *_RUN_BOUNDS
@@ -134,6 +138,8 @@ def speed_stride_shape(
             t0, t1, t2, t3 = flat * cycle, heel * cycle, swing * cycle, strike * cycle
         height = 0.06 + 0.04 * shape_speed + d_height
         toe_off, heel_strike = 0.4 + 0.3 * shape_speed + d_toe_off, -(0.2 + 0.1 * shape_speed)
+        if walker is not None and walker.mid_pitch_midpoint:
+            pitch = 0.5 * (toe_off + heel_strike) + (pitch - _MID_PITCH_DRAW_MEAN)
     k = 1.0 if walker is None else walker.swing_scale(speed)
     if k != 1.0:
         top = MAX_SWING_PITCH_RAD

@@ -58,6 +58,11 @@ cycle to heel-off's × the scale, the swing taking the difference (the recorded 
 rolls down after heel strike for less of the cycle than the simulated one;
 docs/SIM_TO_REAL.md, "The error level and where it comes from").
 
+``mid_pitch_midpoint`` (off by default) puts a walking stride's mid-swing pitch knot at
+the midpoint of its toe-off and heel-strike knots instead of near level
+(:func:`pednav_env.gait.speed_route.speed_stride_shape`), so that the swing's forward
+rotation is spread evenly about mid-swing.
+
 ``monotone_pitch`` (off by default) makes the swing's pitch monotone between its knots
 (stance, toe-off, mid-swing, heel strike, next stance;
 :func:`pednav_env.gait.splines.monotone_clamped_cubic_coefficients`, Fritsch & Carlson
@@ -125,9 +130,10 @@ class StanceMotion:
     pitch_knot_stride_m: float = 0.0
     monotone_pitch: bool = False
     heel_strike_scale: float = 1.0
+    mid_pitch_midpoint: bool = False
 
     def __post_init__(self) -> None:
-        for flag in ("heel_rocker", "monotone_pitch"):
+        for flag in ("heel_rocker", "monotone_pitch", "mid_pitch_midpoint"):
             if not isinstance(getattr(self, flag), bool):
                 raise ValueError(
                     f"StanceMotion.{flag} must be True or False, got {getattr(self, flag)!r}"
@@ -334,9 +340,10 @@ class StanceRandomization:
     pitch_knot_stride_m: float = 0.0
     monotone_pitch: bool = False
     heel_strike_scale: float = 1.0
+    mid_pitch_midpoint: bool = False
 
     def __post_init__(self) -> None:
-        for flag in ("heel_rocker", "monotone_pitch"):
+        for flag in ("heel_rocker", "monotone_pitch", "mid_pitch_midpoint"):
             if not isinstance(getattr(self, flag), bool):
                 raise ValueError(
                     f"StanceRandomization.{flag} must be True or False, got {getattr(self, flag)!r}"
@@ -426,6 +433,7 @@ class StanceRandomization:
             pitch_knot_stride_m=self.pitch_knot_stride_m,
             monotone_pitch=self.monotone_pitch,
             heel_strike_scale=self.heel_strike_scale,
+            mid_pitch_midpoint=self.mid_pitch_midpoint,
             **self._draw_gait(rng),
             **self._draw_cadence(rng),
         )

@@ -146,9 +146,11 @@ def test_model_from_json_reads_a_fit_output_and_a_plain_object(tmp_path: Path) -
     # the given keys, and StanceRandomization's defaults for the others
     assert model.stance == StanceRandomization(flat_fraction=0.3, swing_speed_exponent=0.4)
     flags = tmp_path / "flags.json"
-    flags.write_text(json.dumps({"heel_rocker": True, "monotone_pitch": True}))
+    flags.write_text(
+        json.dumps({"heel_rocker": True, "monotone_pitch": True, "mid_pitch_midpoint": True})
+    )
     assert model_from_json(flags).stance == StanceRandomization(
-        heel_rocker=True, monotone_pitch=True
+        heel_rocker=True, monotone_pitch=True, mid_pitch_midpoint=True
     )
 
 

@@ -42,7 +42,7 @@ def test_one_swing_at_its_phases():
     assert phase[0] == pytest.approx(0.005) and phase[-1] == pytest.approx(0.995)
     assert rate[:50].tolist() == [3.0] * 50 and rate[50:].tolist() == [0.5] * 50
     # ω about x only: the sagittal axis; signed positive over the middle (+3 then +0.5)
-    assert sagittal.tolist() == rate.tolist()
+    np.testing.assert_allclose(sagittal, rate)
     assert np.median(speed[5:45]) == pytest.approx(4.0)
     assert np.median(speed[55:95]) == pytest.approx(2.0)
 
@@ -53,7 +53,8 @@ def test_profile_per_bin():
     assert p["samples"] == [20] * 10
     assert p["fast_still_share"] == [0.0] * 5 + [1.0] * 5
     assert p["rate_median_rad_s"] == [3.0] * 5 + [0.5] * 5
-    assert p["sagittal_rate_median_rad_s"] == [3.0] * 5 + [0.5] * 5
+    assert p["sagittal_rate_median_rad_s"] == pytest.approx([3.0] * 5 + [0.5] * 5)
+    assert p["off_sagittal_rate_median_rad_s"] == pytest.approx([0.0] * 10, abs=1e-9)
     assert p["speed_median_mps"][2] == pytest.approx(4.0)
     assert p["speed_median_mps"][7] == pytest.approx(2.0)
     two = swing_phase_profile([walk()], bins=2)
@@ -73,11 +74,13 @@ def test_refusals():
 
 
 def test_the_sagittal_rate_is_signed_by_the_middle_of_the_swing():
-    # the same walk turning the other way about x, and a small rate about y: the
-    # sagittal axis is still x, and its sign makes the middle of the swing positive
+    # the same walk turning the other way about x, and a steady 0.1 rad/s about y: the
+    # principal direction is still x, and its sign makes the middle of the swing positive
     omega_b, f_b, stance, pos = phase_walk(PHASES)
     omega_b[:, 0] *= -1.0
     omega_b[:, 1] = 0.1
     w = WalkSamples(omega_b, f_b, RATE, "flipped", stance=stance, truth_pos=pos)
-    _, _, _, sagittal = swing_samples(w)
-    assert sagittal.tolist() == [3.0] * 50 + [0.5] * 50
+    _, _, rate, sagittal = swing_samples(w)
+    np.testing.assert_allclose(sagittal, [3.0] * 50 + [0.5] * 50)
+    # what is left is the turning about y: 0.1 rad/s
+    np.testing.assert_allclose(np.sqrt(rate**2 - sagittal**2), 0.1, atol=1e-9)
