@@ -30,7 +30,8 @@ from pednav_env.replay.setup import real_fixed_setup
 #: Models: the shipped calibrated one, today's (before calibration), the calibrated
 #: values with the opt-in heel rocker, unfitted and refitted (v4), and with the
 #: heel-strike phase at 0.77 of heel-off (``heel_strike_scale``) and with the mid-swing
-#: pitch knot at the midpoint (``mid_pitch_midpoint``), both not refitted.
+#: pitch knot at the midpoint (``mid_pitch_midpoint``) and with 0.25 rad of swing roll
+#: (``swing_roll_rad``), none refitted.
 MODEL_NAMES = (
     "calibrated",
     "today",
@@ -38,6 +39,7 @@ MODEL_NAMES = (
     "benchmarks/results/calibrate_foot_v4.json",
     "benchmarks/results/calibrated_heel_strike_0.77.json",
     "benchmarks/results/calibrated_mid_pitch_midpoint.json",
+    "benchmarks/results/calibrated_swing_roll_0.25.json",
 )
 GAMMAS = (2.25e7, 1.3e8, 1.3e9)
 

@@ -23,6 +23,8 @@ and walkers; each arm changes one part):
 - ``mid pitch at the midpoint``: the shipped model with each walking stride's mid-swing
   pitch knot at the midpoint of its toe-off and heel-strike knots
   (``StanceRandomization.mid_pitch_midpoint``), not refitted;
+- ``swing roll``: the shipped model with 0.25 rad added to every stride's mid-swing roll
+  knot (``StanceRandomization.swing_roll_rad``), not refitted;
 - ``heel rocker``: the shipped model with its opt-in heel rocker
   (``StanceRandomization.heel_rocker``: the heel comes to rest on its footfall instead of
   running past it and sliding back; docs/SIM_TO_REAL_CANDIDATES.md), not refitted.
@@ -93,6 +95,9 @@ def arms() -> dict[str, SimModel]:
             "mid pitch at the midpoint",
             "microstrain_gx5",
             replace(calibrated, mid_pitch_midpoint=True),
+        ),
+        "swing roll": SimModel(
+            "swing roll", "microstrain_gx5", replace(calibrated, swing_roll_rad=0.25)
         ),
     }
 

@@ -4,11 +4,13 @@
 Per phase bin of the swing (:mod:`pednav_env.calibration.swing_phases`; tenths unless
 ``--bins``): the median foot speed, the median and 10th percentile of |ω|, the median
 signed sagittal rate and off-sagittal rate, and the share of samples faster than 1 m/s
-turning slower than 1 rad/s. On the 23 PyShoe development trials (stance from their
-VICON labels, speed from VICON) and on simulated walks at the trials' speeds
-(0.3–1.4 m/s, 30–60 s, walk i from ``default_rng([seed, i])``; truth stance and speed):
-the arms of ``benchmarks/sim_error_budget.py`` named in :func:`models`. Nothing is
-chosen on these runs.
+turning slower than 1 rad/s; over the whole swing, the share of samples faster than
+1 m/s below each SHOE threshold of :data:`FAST_BELOW_GAMMAS`. On the 23 PyShoe
+development trials (stance from their VICON labels, speed from VICON) and on simulated
+walks at the trials' speeds (0.3–1.4 m/s, 30–60 s, walk i from
+``default_rng([seed, i])``; truth stance and speed): the arms of
+``benchmarks/sim_error_budget.py`` named in :func:`models`. Nothing is chosen on these
+runs.
 
     PYTHONPATH=. .venv/bin/python benchmarks/swing_phases.py --walks 40 \\
         --json benchmarks/results/swing_phases.json --plot docs/figures/swing_phases.png
@@ -30,9 +32,11 @@ from benchmarks.sim_error_budget import arms
 from pednav_env.calibration.compare import SimModel
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import WalkSamples
-from pednav_env.calibration.swing_phases import swing_phase_profile
+from pednav_env.calibration.swing_phases import fast_below, swing_phase_profile
 
 SPEED_MPS, DURATION_S, SEED = (0.3, 1.4), (30.0, 60.0), 22_600
+#: SHOE thresholds of ``fast_below``: ``real-fixed``'s, and the error level's two others.
+FAST_BELOW_GAMMAS = (2.25e7, 1.3e8, 1.3e9)
 
 
 def models() -> dict[str, SimModel]:
@@ -44,6 +48,7 @@ def models() -> dict[str, SimModel]:
         "heel rocker, monotone pitch",
         "shorter heel strike",
         "mid pitch at the midpoint",
+        "swing roll",
     )
     return {f"simulated, {name}": budget[name] for name in names}
 
@@ -64,11 +69,17 @@ def run(
         "stance": "truth speed" if truth_speed_stance else "labels / simulator truth",
     }
     trials = [stance_of(load_walk(p)) for p in sorted(pyshoe.glob("*.mat"))]
-    result["PyShoe trials"] = swing_phase_profile(trials, bins)
+    result["PyShoe trials"] = {
+        **swing_phase_profile(trials, bins),
+        "fast_below": fast_below(trials, FAST_BELOW_GAMMAS),
+    }
     for name, model in models().items():
         truth, imu = model.batch(SPEED_MPS, walks, seed, DURATION_S)
         sims = [stance_of(samples_from_simulation(truth, imu, i)) for i in range(walks)]
-        result[name] = swing_phase_profile(sims, bins)
+        result[name] = {
+            **swing_phase_profile(sims, bins),
+            "fast_below": fast_below(sims, FAST_BELOW_GAMMAS),
+        }
     return result
 
 
@@ -79,6 +90,11 @@ def profiles(result: dict[str, Any]) -> dict[str, dict[str, Any]]:
 def print_table(result: dict[str, Any]) -> None:
     for name, p in profiles(result).items():
         print(f"{name} ({p['swing_samples']} swing samples)")
+        if "fast_below" in p:
+            shares = ", ".join(
+                f"{g:.3g}: {v:.3f}" for g, v in zip(FAST_BELOW_GAMMAS, p["fast_below"], strict=True)
+            )
+            print(f"  fast swing samples below γ ({shares})")
         print("  phase      speed m/s  |ω| median  |ω| p10  sagittal  off-sag.  fast & still")
         edges = p["bin_edges"]
         for k in range(len(edges) - 1):
@@ -105,6 +121,7 @@ def plot(result: dict[str, Any], path: Path) -> None:
         "simulated, heel rocker, monotone pitch": ("C2", "-.", "v"),
         "simulated, shorter heel strike": ("C1", "--", "x"),
         "simulated, mid pitch at the midpoint": ("C4", ":", "+"),
+        "simulated, swing roll": ("C5", "-.", "*"),
     }
     panels = (
         ("speed_median_mps", "median foot speed (m/s)"),

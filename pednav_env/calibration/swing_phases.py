@@ -28,8 +28,9 @@ forward) is positive; the off-sagittal rate is the magnitude of the rest,
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -53,17 +54,26 @@ MIN_SWING_S, MAX_SWING_S = 0.25, 1.5
 FAST_MPS, STILL_RAD_S = 1.0, 1.0
 
 
-def swing_samples(
-    samples: WalkSamples,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(phase, foot speed m/s, |ω| rad/s, signed sagittal rate rad/s)`` of the walk's
-    swing samples (module docstring); ValueError when the walk has no truth positions
-    or its stance comes from the detector rule (no labels, no truth stance)."""
+class SwingSamples(NamedTuple):
+    """A walk's swing samples (module docstring), each ``(K,)``."""
+
+    phase: np.ndarray
+    speed_mps: np.ndarray
+    rate_rad_s: np.ndarray  # |ω|
+    sagittal_rad_s: np.ndarray  # signed, along the principal direction
+    log_shoe: np.ndarray  # log10 of the SHOE statistic (PyShoe's settings)
+
+
+def swing_samples(samples: WalkSamples) -> SwingSamples:
+    """The walk's swing samples (module docstring); ValueError when the walk has no
+    truth positions or its stance comes from the detector rule (no labels, no truth
+    stance)."""
     s = samples
     if s.truth_pos is None:
         raise ValueError(f"{s.name}: swing phases need truth positions (the foot speed)")
     rate = float(s.rate_hz)
-    source, stance, _, walking = walking_part(s, log10_shoe(s.omega_b, s.f_b, rate, s.g))
+    log_t = log10_shoe(s.omega_b, s.f_b, rate, s.g)
+    source, stance, _, walking = walking_part(s, log_t)
     if source == StanceSource.DETECTOR:
         raise ValueError(f"{s.name}: swing phases need stance labels or truth stance")
     stance = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
@@ -71,7 +81,7 @@ def swing_samples(
     for a, b in truth_glitches(s.truth_pos, rate):
         speed[a : b + 1] = np.nan
     rate_norm = np.linalg.norm(s.omega_b, axis=1)
-    phases, speeds, rates, axes = [], [], [], []
+    phases, speeds, rates, axes, shoe = [], [], [], [], []
     for a, b in zip(*runs(walking & ~stance), strict=True):
         n = int(b - a)
         if not (MIN_SWING_S * rate <= n <= MAX_SWING_S * rate):
@@ -81,15 +91,37 @@ def swing_samples(
         speeds.append(speed[a:b][ok])
         rates.append(rate_norm[a:b][ok])
         axes.append(s.omega_b[a:b][ok])
+        shoe.append(log_t[a:b][ok])
     if not phases:
-        return np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0)
+        return SwingSamples(*(np.zeros(0) for _ in range(5)))
     phase, omega = np.concatenate(phases), np.concatenate(axes)
     _, _, principal = np.linalg.svd(omega - omega.mean(axis=0), full_matrices=False)
     sagittal = omega @ principal[0]
     middle = (phase > 0.4) & (phase < 0.6)
     if middle.any() and np.median(sagittal[middle]) < 0:
         sagittal = -sagittal
-    return phase, np.concatenate(speeds), np.concatenate(rates), sagittal
+    return SwingSamples(
+        phase, np.concatenate(speeds), np.concatenate(rates), sagittal, np.concatenate(shoe)
+    )
+
+
+def pooled(walks: Sequence[WalkSamples]) -> SwingSamples:
+    """The swing samples of ``walks`` end to end."""
+    parts = [swing_samples(w) for w in walks]
+    return SwingSamples(
+        *(np.concatenate([p[i] for p in parts]) if parts else np.zeros(0) for i in range(5))
+    )
+
+
+def fast_below(walks: Sequence[WalkSamples], thresholds: Sequence[float]) -> list[float | None]:
+    """Per SHOE threshold γ: the share of the fast swing samples (foot speed above
+    :data:`FAST_MPS`) whose SHOE statistic is below γ, i.e. that a detector with that γ
+    calls stance while the foot moves at more than 1 m/s (None without fast samples)."""
+    every = pooled(walks)
+    fast = every.speed_mps > FAST_MPS
+    if not fast.any():
+        return [None for _ in thresholds]
+    return [float(np.mean(every.log_shoe[fast] < math.log10(g))) for g in thresholds]
 
 
 def swing_phase_profile(walks: Sequence[WalkSamples], bins: int = 10) -> dict[str, Any]:
@@ -100,11 +132,13 @@ def swing_phase_profile(walks: Sequence[WalkSamples], bins: int = 10) -> dict[st
     ``swing_samples`` (the total)."""
     if bins < 1:
         raise ValueError(f"bins must be ≥ 1, got {bins}")
-    parts = [swing_samples(w) for w in walks]
-    phase = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0)
-    speed = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0)
-    rate = np.concatenate([p[2] for p in parts]) if parts else np.zeros(0)
-    sagittal = np.concatenate([p[3] for p in parts]) if parts else np.zeros(0)
+    every = pooled(walks)
+    phase, speed, rate, sagittal = (
+        every.phase,
+        every.speed_mps,
+        every.rate_rad_s,
+        every.sagittal_rad_s,
+    )
     off = np.sqrt(np.maximum(rate**2 - sagittal**2, 0.0))
     index = np.minimum((phase * bins).astype(int), bins - 1)
     out: dict[str, Any] = {

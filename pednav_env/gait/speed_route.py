@@ -113,7 +113,8 @@ def speed_stride_shape(
     min(1, L / L_k), L the stride's length
     (:meth:`StanceMotion.pitch_knot_factor`). A ``walker`` with ``mid_pitch_midpoint``
     puts a walking stride's mid-swing pitch knot at the midpoint of its toe-off and
-    heel-strike knots, with the drawn jitter about it (before the swing scale). The
+    heel-strike knots, with the drawn jitter about it (before the swing scale). A
+    ``walker`` with ``swing_roll_rad`` adds it to every stride's mid-swing roll knot. The
     draws from ``rng`` are the same with or without a walker."""
     if gait is Gait.RUN:
         cycle, stance_frac, height, toe_off, heel_strike, pitch, roll = rng.uniform(
@@ -145,6 +146,8 @@ def speed_stride_shape(
         top = MAX_SWING_PITCH_RAD
         toe_off, heel_strike = min(k * toe_off, top), max(k * heel_strike, -top)
         pitch = min(max(k * pitch, -top), top)
+    if walker is not None and walker.swing_roll_rad:
+        roll = walker.swing_roll_rad + roll
     length = speed * cycle
     g = 1.0 if walker is None else walker.pitch_knot_factor(length)
     if g != 1.0:

@@ -63,6 +63,11 @@ the midpoint of its toe-off and heel-strike knots instead of near level
 (:func:`pednav_env.gait.speed_route.speed_stride_shape`), so that the swing's forward
 rotation is spread evenly about mid-swing.
 
+``swing_roll_rad`` (0 by default) adds a roll of that many radians to every stride's
+mid-swing roll knot: the foot inverts during the swing and comes back by heel strike,
+turning about a second axis as recorded feet do (docs/SIM_TO_REAL.md, "The error level
+and where it comes from").
+
 ``monotone_pitch`` (off by default) makes the swing's pitch monotone between its knots
 (stance, toe-off, mid-swing, heel strike, next stance;
 :func:`pednav_env.gait.splines.monotone_clamped_cubic_coefficients`, Fritsch & Carlson
@@ -91,6 +96,7 @@ from pednav_env.gait.walker_checks import (
     check_cadence_law,
     check_heel_strike_scale,
     check_pitch_knot_stride,
+    check_swing_roll,
 )
 
 Array = NDArray[np.float64]
@@ -131,6 +137,7 @@ class StanceMotion:
     monotone_pitch: bool = False
     heel_strike_scale: float = 1.0
     mid_pitch_midpoint: bool = False
+    swing_roll_rad: float = 0.0
 
     def __post_init__(self) -> None:
         for flag in ("heel_rocker", "monotone_pitch", "mid_pitch_midpoint"):
@@ -139,6 +146,7 @@ class StanceMotion:
                     f"StanceMotion.{flag} must be True or False, got {getattr(self, flag)!r}"
                 )
         check_heel_strike_scale("StanceMotion", self.heel_strike_scale)
+        check_swing_roll("StanceMotion", self.swing_roll_rad)
         check_pitch_knot_stride("StanceMotion", self.pitch_knot_stride_m)
         check_cadence_law("StanceMotion", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps)
         for name in ("quiet_rad", "edge_rad", "roll_rad", "stance_spread_log10"):
@@ -341,6 +349,7 @@ class StanceRandomization:
     monotone_pitch: bool = False
     heel_strike_scale: float = 1.0
     mid_pitch_midpoint: bool = False
+    swing_roll_rad: float = 0.0
 
     def __post_init__(self) -> None:
         for flag in ("heel_rocker", "monotone_pitch", "mid_pitch_midpoint"):
@@ -349,6 +358,7 @@ class StanceRandomization:
                     f"StanceRandomization.{flag} must be True or False, got {getattr(self, flag)!r}"
                 )
         check_heel_strike_scale("StanceRandomization", self.heel_strike_scale)
+        check_swing_roll("StanceRandomization", self.swing_roll_rad)
         check_pitch_knot_stride("StanceRandomization", self.pitch_knot_stride_m)
         check_cadence_law(
             "StanceRandomization", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps
@@ -434,6 +444,7 @@ class StanceRandomization:
             monotone_pitch=self.monotone_pitch,
             heel_strike_scale=self.heel_strike_scale,
             mid_pitch_midpoint=self.mid_pitch_midpoint,
+            swing_roll_rad=self.swing_roll_rad,
             **self._draw_gait(rng),
             **self._draw_cadence(rng),
         )

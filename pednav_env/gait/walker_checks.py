@@ -1,7 +1,7 @@
 """The checks a walker's stance-motion fields share: ``StanceMotion`` and
 ``StanceRandomization`` (:mod:`pednav_env.gait.stance_motion`) run the same ones on the
-same fields, the walking cadence law, the pitch-knot stride length and the heel-strike
-share. Each raises a ValueError naming its owner and field.
+same fields, the walking cadence law, the pitch-knot stride length, the heel-strike
+share and the swing roll. Each raises a ValueError naming its owner and field.
 """
 
 from __future__ import annotations
@@ -69,3 +69,12 @@ def check_heel_strike_scale(owner: str, scale: float) -> None:
     """ValueError unless the heel-strike share's factor is in [0.25, 2]."""
     if not (isinstance(scale, int | float) and math.isfinite(scale) and 0.25 <= scale <= 2.0):
         raise ValueError(f"{owner}.heel_strike_scale must be in [0.25, 2], got {scale!r}")
+
+
+def check_swing_roll(owner: str, roll_rad: float) -> None:
+    """ValueError unless the added mid-swing roll is a number in [−0.5, 0.5] rad (the
+    stride's roll knot must stay below 1.4 rad in magnitude; 0: off)."""
+    if isinstance(roll_rad, bool) or not (
+        isinstance(roll_rad, int | float) and math.isfinite(roll_rad) and abs(roll_rad) <= 0.5
+    ):
+        raise ValueError(f"{owner}.swing_roll_rad must be in [−0.5, 0.5] rad, got {roll_rad!r}")

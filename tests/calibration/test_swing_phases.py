@@ -8,7 +8,7 @@ import pytest
 from labelled_walk import phase_walk
 
 from pednav_env.calibration.stats import WalkSamples
-from pednav_env.calibration.swing_phases import swing_phase_profile, swing_samples
+from pednav_env.calibration.swing_phases import fast_below, swing_phase_profile, swing_samples
 
 RATE = 200.0
 #: stance 0.5 s; a 0.5 s swing: 50 samples turning at 3 rad/s over 1 m (4 m/s), then
@@ -37,7 +37,7 @@ def walk(truth: bool = True, labels: bool = True) -> WalkSamples:
 
 
 def test_one_swing_at_its_phases():
-    phase, speed, rate, sagittal = swing_samples(walk())
+    phase, speed, rate, sagittal, _ = swing_samples(walk())
     assert phase.size == 100  # the 0.1 s flicker is not a swing
     assert phase[0] == pytest.approx(0.005) and phase[-1] == pytest.approx(0.995)
     assert rate[:50].tolist() == [3.0] * 50 and rate[50:].tolist() == [0.5] * 50
@@ -80,7 +80,20 @@ def test_the_sagittal_rate_is_signed_by_the_middle_of_the_swing():
     omega_b[:, 0] *= -1.0
     omega_b[:, 1] = 0.1
     w = WalkSamples(omega_b, f_b, RATE, "flipped", stance=stance, truth_pos=pos)
-    _, _, rate, sagittal = swing_samples(w)
+    _, _, rate, sagittal, _ = swing_samples(w)
     np.testing.assert_allclose(sagittal, [3.0] * 50 + [0.5] * 50)
     # what is left is the turning about y: 0.1 rad/s
     np.testing.assert_allclose(np.sqrt(rate**2 - sagittal**2), 0.1, atol=1e-9)
+
+
+def test_fast_swing_samples_below_a_threshold():
+    # the fast samples (4 m/s turning at 3 rad/s, 2 m/s at 0.5 rad/s): with |f| = g the
+    # SHOE statistic is ω²/σ_ω² (PyShoe's σ_ω = 8.7266e-5 rad/s), 10^9.07 and 10^7.52
+    shoe_fast, shoe_slow = (3.0 / 8.7266463e-5) ** 2, (0.5 / 8.7266463e-5) ** 2
+    lo, mid, hi = 0.5 * shoe_slow, 0.5 * (shoe_slow + shoe_fast), 2 * shoe_fast
+    # the samples next to the swing's ends are slower than 1 m/s or mixed: count them
+    every = swing_samples(walk())
+    fast = every.speed_mps > 1.0
+    share_slow = float(np.mean(every.rate_rad_s[fast] == 0.5))
+    assert fast_below([walk()], [lo, mid, hi]) == pytest.approx([0.0, share_slow, 1.0])
+    assert 0.4 < share_slow < 0.6
