@@ -93,10 +93,7 @@ from pednav_env.gait.walker_checks import (
     CADENCE_CHECK_SPEEDS,
     CADENCE_HZ_RANGE,
     DEFAULT_CADENCE,
-    check_cadence_law,
-    check_heel_strike_scale,
-    check_pitch_knot_stride,
-    check_swing_roll,
+    check_walker_fields,
 )
 
 Array = NDArray[np.float64]
@@ -140,15 +137,7 @@ class StanceMotion:
     swing_roll_rad: float = 0.0
 
     def __post_init__(self) -> None:
-        for flag in ("heel_rocker", "monotone_pitch", "mid_pitch_midpoint"):
-            if not isinstance(getattr(self, flag), bool):
-                raise ValueError(
-                    f"StanceMotion.{flag} must be True or False, got {getattr(self, flag)!r}"
-                )
-        check_heel_strike_scale("StanceMotion", self.heel_strike_scale)
-        check_swing_roll("StanceMotion", self.swing_roll_rad)
-        check_pitch_knot_stride("StanceMotion", self.pitch_knot_stride_m)
-        check_cadence_law("StanceMotion", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps)
+        check_walker_fields("StanceMotion", self)
         for name in ("quiet_rad", "edge_rad", "roll_rad", "stance_spread_log10"):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0 <= v < 1.0):
@@ -352,17 +341,7 @@ class StanceRandomization:
     swing_roll_rad: float = 0.0
 
     def __post_init__(self) -> None:
-        for flag in ("heel_rocker", "monotone_pitch", "mid_pitch_midpoint"):
-            if not isinstance(getattr(self, flag), bool):
-                raise ValueError(
-                    f"StanceRandomization.{flag} must be True or False, got {getattr(self, flag)!r}"
-                )
-        check_heel_strike_scale("StanceRandomization", self.heel_strike_scale)
-        check_swing_roll("StanceRandomization", self.swing_roll_rad)
-        check_pitch_knot_stride("StanceRandomization", self.pitch_knot_stride_m)
-        check_cadence_law(
-            "StanceRandomization", self.cadence_intercept_hz, self.cadence_slope_hz_per_mps
-        )
+        check_walker_fields("StanceRandomization", self)
         if not (math.isfinite(self.cadence_log10_std) and 0 <= self.cadence_log10_std <= 0.3):
             raise ValueError(
                 "StanceRandomization.cadence_log10_std must be in [0, 0.3], "

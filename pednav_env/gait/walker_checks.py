@@ -7,6 +7,7 @@ share and the swing roll. Each raises a ValueError naming its owner and field.
 from __future__ import annotations
 
 import math
+from typing import Protocol
 
 #: The route's walking cadence law f = 0.55 + 0.3 v (Hz, v in m/s;
 #: :class:`pednav_env.gait.speed_route.SpeedRouteConfig`): intercept and slope.
@@ -78,3 +79,31 @@ def check_swing_roll(owner: str, roll_rad: float) -> None:
         isinstance(roll_rad, int | float) and math.isfinite(roll_rad) and abs(roll_rad) <= 0.5
     ):
         raise ValueError(f"{owner}.swing_roll_rad must be in [−0.5, 0.5] rad, got {roll_rad!r}")
+
+
+#: The on/off model options of a walker (``True`` or ``False``).
+WALKER_FLAGS = ("heel_rocker", "monotone_pitch", "mid_pitch_midpoint")
+
+
+class WalkerFields(Protocol):
+    """The fields ``StanceMotion`` and ``StanceRandomization`` share and check alike."""
+
+    heel_strike_scale: float
+    swing_roll_rad: float
+    pitch_knot_stride_m: float
+    cadence_intercept_hz: float | None
+    cadence_slope_hz_per_mps: float
+
+
+def check_walker_fields(owner: str, walker: WalkerFields) -> None:
+    """The checks every walker (``StanceMotion``, ``StanceRandomization``) runs on the
+    fields they share: the flags of :data:`WALKER_FLAGS`, the heel-strike share, the
+    swing roll, the pitch-knot stride length and the cadence law."""
+    for flag in WALKER_FLAGS:
+        value = getattr(walker, flag)
+        if not isinstance(value, bool):
+            raise ValueError(f"{owner}.{flag} must be True or False, got {value!r}")
+    check_heel_strike_scale(owner, walker.heel_strike_scale)
+    check_swing_roll(owner, walker.swing_roll_rad)
+    check_pitch_knot_stride(owner, walker.pitch_knot_stride_m)
+    check_cadence_law(owner, walker.cadence_intercept_hz, walker.cadence_slope_hz_per_mps)
