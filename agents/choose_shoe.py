@@ -123,9 +123,16 @@ def threshold_sweep(
 ) -> Array:
     """(recordings, thresholds) errors of ``setup`` with each SHOE threshold γ (its
     other values kept): the search for the best single γ."""
+    knobs = threshold_knobs(setup, thresholds)
+    return np.array([lane_errors(rec, setup, knobs) for rec in recordings])
+
+
+def threshold_knobs(setup: RealFilterSetup, thresholds: Sequence[float]) -> dict[str, Array]:
+    """One lane per SHOE threshold γ, ``setup``'s noise scales on every lane: the
+    knobs of ``run_prepared`` for a threshold sweep."""
     if not isinstance(setup.filter.detector, ShoeDetectorConfig):
         raise ValueError("threshold_sweep needs a SHOE detector setup")
     knobs = {"shoe_threshold": np.asarray(thresholds, dtype=float)}
     for name in ("process_noise_scale", "zupt_noise_scale"):
         knobs[name] = np.full(len(thresholds), getattr(setup.filter, name))
-    return np.array([lane_errors(rec, setup, knobs) for rec in recordings])
+    return knobs

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 import pednav_env  # noqa: F401  (registers the environments)
-from agents.choose_shoe import simulated_recordings, threshold_sweep
+from agents.choose_shoe import simulated_recordings, threshold_knobs, threshold_sweep
 from agents.cli_options import speed_config
 from agents.evaluate import evaluate
 from baselines.tuned import result_key
@@ -124,9 +124,7 @@ def replayed(walks: int, seed: int = REPLAYED_SEED) -> dict[str, Any]:
     along the walk stays in it, as in the env's error), over the walks on which no
     γ diverged, and the number of diverged walks per γ."""
     setup = real_fixed_setup()
-    knobs = {"shoe_threshold": np.asarray(THRESHOLDS, dtype=float)}
-    for name in ("process_noise_scale", "zupt_noise_scale"):
-        knobs[name] = np.full(len(THRESHOLDS), getattr(setup.filter, name))
+    knobs = threshold_knobs(setup, THRESHOLDS)
     out = {}
     for name, speed in REPLAYED_REGIMES.items():
         recordings = simulated_recordings(

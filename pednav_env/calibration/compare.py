@@ -34,6 +34,7 @@ from pednav_env.calibration.stats import WalkStats, walk_stats
 from pednav_env.gait.foot import FootSimConfig, FootTrajectory, simulate_foot
 from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
+from pednav_env.gait.walker_checks import WALKER_FLAGS
 from pednav_env.sensors.imu import IMU_GRADES, ImuMeasurements, simulate_imu
 
 #: Speed bands (m/s), lower bound included.
@@ -396,7 +397,7 @@ MODELS = {
 #: Keys a fitted-parameter file may hold beside the StanceRandomization fields.
 _MODEL_FILE_KEYS = ("imu_grade",)
 #: StanceRandomization fields a fitted-parameter file gives as true or false.
-_MODEL_FILE_FLAGS = ("heel_rocker", "monotone_pitch", "mid_pitch_midpoint")
+_MODEL_FILE_FLAGS = WALKER_FLAGS
 
 
 def model_from_json(path: str | Path) -> SimModel:
