@@ -331,7 +331,8 @@ def add_recording_commands(sub: argparse._SubParsersAction) -> None:
         "--gait",
         choices=("slow_walk", "walk", "fast_walk", "run"),
         default=None,
-        help="one gait class at its own speeds, instead of --speed",
+        help="one gait class at its speeds, instead of --speed: slow_walk 0.27-0.67, "
+        "walk 0.75-1.2, fast_walk 1.25-1.65, run 2-3.7 m/s (the model applies as with --speed)",
     )
     si.add_argument(
         "--duration",

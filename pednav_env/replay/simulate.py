@@ -16,15 +16,19 @@ a recording. Columns, one line per IMU sample:
 
 ¹ x forward, y left, z up: a level IMU reads +g on z at rest.
 
-The route: with a speed range, :func:`pednav_env.gait.speed_route.speed_route`
-(each stride's speed drawn in the range, the gait following from the speed);
-with a gait class instead, :func:`pednav_env.gait.foot_route.random_route`
-with only that class (its own speed ranges). Both start with a 2 s stand (the
-alignment of ``pednav run``) and end with a 1 s stand; stops (standing 1–5 s
-at the start of a leg) are on by default.
+The route: :func:`pednav_env.gait.speed_route.speed_route`, each stride's speed
+drawn in a range and the gait following from the speed. The range is the one
+given, or with a gait class instead the class's speeds
+(:data:`GAIT_SPEEDS_MPS`), so that every stride is of that class. It starts
+with a 2 s stand (the alignment of ``pednav run``) and ends with a 1 s stand;
+stops (standing 1–5 s at the start of a leg) are on by default.
 
 The simulator model — IMU grade and stance dynamics — defaults to
-:data:`DEFAULT_MODEL`.
+:data:`DEFAULT_MODEL`. Its walker (:class:`StanceRandomization`) applies in
+full with a speed range and with a gait class alike: stance micro-motion and
+roll-over, heel rocker and monotone pitch, and the stride shapes of
+:func:`pednav_env.gait.speed_route.speed_stride_shape` (cadence law, cycle
+shares, swing scale, pitch knots, swing roll).
 """
 
 from __future__ import annotations
@@ -32,14 +36,14 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.gait.foot import FootSimConfig, simulate_foot
-from pednav_env.gait.foot_route import Gait, RouteRandomization, random_route
+from pednav_env.gait.foot_route import Gait
 from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.io.validate import MAX_RATE_HZ, MIN_RATE_HZ
@@ -66,6 +70,17 @@ DEFAULT_MODEL = SimulatorModel("calibrated", "microstrain_gx5", StanceRandomizat
 #: Gait names accepted by :class:`SimulateConfig` (``--gait``).
 GAIT_NAMES = {"slow_walk": Gait.SLOW_WALK, "walk": Gait.WALK, "fast_walk": Gait.FAST_WALK}
 GAIT_NAMES["run"] = Gait.RUN
+#: Stride speed range (m/s) of each gait class (``--gait``): the speeds, stride length
+#: over cycle, that :func:`pednav_env.gait.foot_route.random_route` gives the class
+#: (slow walk 0.27–0.67, walk 0.67–1.2, fast walk 1.2–1.65, run 2.0–3.7 m/s), kept
+#: inside the class's band of :func:`pednav_env.gait.speed_route.gait_for_speed`
+#: (slow walk below 0.75, walk below 1.25, fast walk below 2 m/s, run above).
+GAIT_SPEEDS_MPS = {
+    "slow_walk": (0.27, 0.67),
+    "walk": (0.75, 1.2),
+    "fast_walk": (1.25, 1.65),
+    "run": (2.0, 3.7),
+}
 #: Stride speed range (m/s) when neither a speed range nor a gait is given.
 DEFAULT_SPEED_MPS = SpeedRouteConfig().speed_mps
 #: Longest walk (s): two hours, 1.4 million samples at 200 Hz (a longer one would
@@ -96,7 +111,8 @@ class SimulateConfig:
     ----------
     speed_mps : (lo, hi) m/s, range of every stride's speed (0.1 ≤ lo ≤ hi ≤ 4),
         or None; exclusive with ``gait``. Neither: :data:`DEFAULT_SPEED_MPS`.
-    gait : a name of :data:`GAIT_NAMES` (one gait class at its own speeds) or None.
+    gait : a name of :data:`GAIT_NAMES` or None: one gait class, every stride's
+        speed in the class's range (:data:`GAIT_SPEEDS_MPS`).
     duration_s : s, length of the walk (it ends with the last stride that fits),
         5 s to :data:`MAX_DURATION_S`.
     rate_hz : Hz, IMU sample rate, in the range the loaders read
@@ -169,18 +185,13 @@ def simulate_walk(config: SimulateConfig) -> SimulatedWalk:
     motion = None if config.model.stance is None else config.model.stance().draw(rng)
     stop = SpeedRouteConfig().stop_probability if config.stops else 0.0
     duration = (config.duration_s, config.duration_s)
+    speed = config.speed_mps or DEFAULT_SPEED_MPS
     if config.gait is not None:
-        weights = tuple(float(g == GAIT_NAMES[config.gait]) for g in list(Gait)[1:])
-        cfg = RouteRandomization(
-            duration_s=duration, stop_probability=stop, stop_s=(1.0, 5.0), gait_weights=weights
-        )
-        route = replace(random_route(rng, cfg), stance_motion=motion)
-    else:
-        speed = config.speed_mps or DEFAULT_SPEED_MPS
-        cfg = SpeedRouteConfig(
-            speed_mps=speed, duration_s=duration, stop_probability=stop, stance_motion=motion
-        )
-        route = speed_route(rng, cfg)
+        speed = GAIT_SPEEDS_MPS[config.gait]
+    cfg = SpeedRouteConfig(
+        speed_mps=speed, duration_s=duration, stop_probability=stop, stance_motion=motion
+    )
+    route = speed_route(rng, cfg)
     truth = simulate_foot(route, FootSimConfig(rate_hz=config.rate_hz))
     imu = simulate_imu(
         truth.omega_b,

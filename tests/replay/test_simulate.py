@@ -17,6 +17,8 @@ from pednav_env.io.saturation import runs
 from pednav_env.replay.simulate import (
     CSV_COLUMNS,
     DEFAULT_MODEL,
+    GAIT_NAMES,
+    GAIT_SPEEDS_MPS,
     SimulateConfig,
     simulate_walk,
     write_recording_csv,
@@ -84,10 +86,43 @@ def test_each_stride_speed_lies_in_the_range_and_sets_the_gait():
 
 
 def test_gait_option_and_no_stops():
-    walk = simulate_walk(SimulateConfig(gait="slow_walk", duration_s=30, stops=False))
-    assert set(np.unique(walk.gait).tolist()) == {Gait.STANDING, Gait.SLOW_WALK}
-    stands = [(e - s) / 200.0 for s, e in runs(walk.stance)][1:-1]
-    assert max(stands) < 1.0  # slow-walk stances are 0.36-0.57 s; a stop would be ≥ 1 s
+    """``--gait G``: every stride of class G, at the class's speeds (GAIT_SPEEDS_MPS)."""
+    for name, gait in GAIT_NAMES.items():
+        walk = simulate_walk(SimulateConfig(gait=name, duration_s=20, stops=False))
+        assert set(np.unique(walk.gait).tolist()) == {Gait.STANDING, gait}
+        lo, hi = GAIT_SPEEDS_MPS[name]
+        cols = {"stance": walk.stance, "time": walk.time}
+        cols.update(pos_x=walk.pos_n[:, 0], pos_y=walk.pos_n[:, 1])
+        v = stride_speeds(cols)  # the IMU's, within ~5 % of the heel's (test above)
+        assert len(v) >= 5 and v.min() > lo * 0.95 and v.max() < hi * 1.05
+        if name == "slow_walk":
+            stands = [(e - s) / 200.0 for s, e in runs(walk.stance)][1:-1]
+            assert max(stands) < 1.0  # slow-walk stances are < 1 s; a stop would be ≥ 1 s
+
+
+def test_gait_option_walks_the_models_walker(tmp_path, capsys):
+    """``--gait`` applies the model's walker as ``--speed`` does (it used to draw the
+    strides without it): a model file whose cadence law is f = 1.2 Hz (b = 0) walks
+    0.83 s cycles (±7 %) with ``--gait slow_walk``, where a slow walk without the law
+    takes 1.2 s or more; and ``--gait walk`` is ``--speed 0.75 1.2``, byte for byte."""
+    model = tmp_path / "quick.json"
+    law = {"cadence_intercept_hz": 1.2, "cadence_slope_hz_per_mps": 0.0}
+    model.write_text(json.dumps({**asdict(StanceRandomization.calibrated()), **law}))
+    out = tmp_path / "quick.csv"
+    argv = ["simulate", "--out", str(out), "--duration", "30", "--gait", "slow_walk"]
+    assert main([*argv, "--no-stops", "--seed", "3", "--model", str(model)]) == 0
+    cols = read_back(out)
+    assert set(np.unique(cols["gait"]).tolist()) == {Gait.STANDING, Gait.SLOW_WALK}
+    starts = np.array([s for s, _ in runs(cols["stance"].astype(bool))])
+    cycles = np.diff(cols["time"][starts[1:-1]])
+    assert len(cycles) >= 20
+    assert np.all((cycles > 0.93 / 1.2) & (cycles < 1.07 / 1.2))
+    paths = {}
+    for name, args in (("gait", ["--gait", "walk"]), ("speed", ["--speed", "0.75", "1.2"])):
+        paths[name] = tmp_path / f"{name}.csv"
+        assert main(["simulate", "--out", str(paths[name]), "--duration", "10", *args]) == 0
+    capsys.readouterr()
+    assert paths["gait"].read_bytes() == paths["speed"].read_bytes()
 
 
 def test_seeds_and_options_are_honoured(tmp_path):
