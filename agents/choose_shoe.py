@@ -48,12 +48,14 @@ def simulated_recordings(
     seed: int,
     speed_mps: tuple[float, float] = SIM_SPEED_MPS,
     duration_s: tuple[float, float] = SIM_DURATION_S,
+    turn_per_stride_rad: tuple[float, float] | None = None,
 ) -> list[Recording]:
     """``walks`` simulated walks of ``model`` as recordings with truth (walk i from
-    ``default_rng([seed, i])``; :meth:`SimModel.batch`)."""
+    ``default_rng([seed, i])``; :meth:`SimModel.batch`, with ``turn_per_stride_rad``
+    every leg on a circle)."""
     if walks < 1:
         raise ValueError(f"walks must be ≥ 1, got {walks}")
-    truth, imu = model.batch(speed_mps, walks, seed, duration_s)
+    truth, imu = model.batch(speed_mps, walks, seed, duration_s, turn_per_stride_rad)
     return [
         recording_from_simulation(truth, imu, i, f"{model.name}-{seed}-{i}") for i in range(walks)
     ]

@@ -204,7 +204,8 @@ def _add_sim2real(sub: argparse._SubParsersAction) -> None:
         "--nav",
         action="store_true",
         help="also the error level: real-fixed's ARMSE on each recording with dense truth "
-        "beside simulated twins of its speed and length (docs/SIM_TO_REAL.md)",
+        "(footprint error with footprints) beside simulated twins of its speed, length and "
+        "turn per stride (docs/SIM_TO_REAL.md)",
     )
     s2r.add_argument(
         "--nav-walks",

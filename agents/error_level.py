@@ -10,8 +10,12 @@ generic CSV with positions) or footprints (the hallway walks):
   only its mean footprint error;
 - its simulated twins: ``walks`` walks of the simulator model with every stride's speed
   within ±:data:`SPEED_SPREAD` of the recording's walking speed
-  (:func:`pednav_env.calibration.stats.walk_stats`) and the recording's length, turns
-  and stops as the calibrated scenario draws them; recording r's walk i draws from
+  (:func:`pednav_env.calibration.stats.walk_stats`), the recording's length, and the
+  recording's turning: every leg of a twin walks a circle whose turn per stride is
+  drawn between the 25th and 75th percentile of the recording's |turn per stride|
+  (:func:`pednav_env.calibration.path_turns.turn_range`, from its truth track or
+  footprints; at most π/2), stops as the calibrated scenario draws them (``match_turns``
+  False: the scenario's straight legs and turns instead); recording r's walk i draws from
   ``numpy.random.default_rng([100000·seed + r, i])``; the same filter and measure
   against the simulated truth (for a footprint walk, footprints at the last sample of
   each simulated stance, the truth dropped, so that the twins are scored by the
@@ -39,8 +43,9 @@ from numpy.typing import NDArray
 
 from agents.choose_shoe import lane_errors
 from pednav_env.calibration.compare import ENVELOPE_PERCENT, SimModel, coverage_interval
+from pednav_env.calibration.path_turns import turn_range
 from pednav_env.calibration.sources import recording_from_simulation, samples_from_recording
-from pednav_env.calibration.stats import walk_stats
+from pednav_env.calibration.stats import WalkSamples, walk_stats
 from pednav_env.io import Footprints, Recording
 from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
 
@@ -66,6 +71,8 @@ class RecordingLevel:
     error_m: float
     twins_m: Array
     measure: str = "PyShoe ARMSE"
+    #: The twins' turn per stride range (rad), None for the scenario's straight legs.
+    turn_rad: tuple[float, float] | None = None
 
     @property
     def envelope_m(self) -> tuple[float, float]:
@@ -107,6 +114,7 @@ class RecordingLevel:
             "duration_s": self.duration_s,
             "error_m": num(self.error_m),
             "twins": int(self.twins_m.size),
+            "twin_turn_per_stride_rad": None if self.turn_rad is None else list(self.turn_rad),
             "twins_diverged": int(np.sum(~np.isfinite(self.twins_m))),
             "twin_median_m": num(self.median_m),
             "twin_envelope_m": [num(lo), num(hi)],
@@ -161,7 +169,8 @@ class ErrorLevelReport:
         lines = [
             f"error level: {self.setup}'s PyShoe ARMSE (footprint error for footprint walks), "
             f"each recording against {self.walks} "
-            f"simulated twins ({self.model}; same speed ±{SPEED_SPREAD:.0%}, same length)",
+            f"simulated twins ({self.model}; same speed ±{SPEED_SPREAD:.0%}, same length"
+            f"{', same turn per stride' if any(r.turn_rad for r in self.rows) else ''})",
             f"{'recording':28s} {'m/s':>5s} {'s':>5s} {'error m':>8s} "
             f"{'twins: median [5–95 %] m':>28s} {'pct':>5s}  covered",
         ]
@@ -201,6 +210,17 @@ def twin_speed(speed_mps: float) -> tuple[float, float]:
     return lo, hi
 
 
+def twin_turn(samples: WalkSamples) -> tuple[float, float] | None:
+    """The twins' turn per stride range (rad) for a recording: its
+    :func:`~pednav_env.calibration.path_turns.turn_range`, at most π/2 (the route's
+    limit); None without enough strides."""
+    turn = turn_range(samples)
+    if turn is None:
+        return None
+    top = math.pi / 2
+    return min(turn[0], top), min(turn[1], top)
+
+
 def twin_recordings(
     model: SimModel,
     walks: int,
@@ -208,10 +228,12 @@ def twin_recordings(
     speed_mps: tuple[float, float],
     duration_s: float,
     footprints: bool,
+    turn_per_stride_rad: tuple[float, float] | None = None,
 ) -> list[Recording]:
     """``walks`` simulated twins (walk i from ``default_rng([seed, i])``) as recordings:
-    with their truth track, or with ``footprints`` footprints only (module docstring)."""
-    truth, imu = model.batch(speed_mps, walks, seed, (duration_s, duration_s))
+    with their truth track, or with ``footprints`` footprints only (module docstring);
+    with ``turn_per_stride_rad`` every leg on a circle."""
+    truth, imu = model.batch(speed_mps, walks, seed, (duration_s, duration_s), turn_per_stride_rad)
     out = []
     for i in range(walks):
         rec = recording_from_simulation(truth, imu, i, f"{model.name}-{seed}-{i}")
@@ -231,9 +253,11 @@ def error_level(
     seed: int = 0,
     setup: RealFilterSetup | None = None,
     setup_name: str = "real-fixed",
+    match_turns: bool = True,
 ) -> ErrorLevelReport:
     """The report of the module docstring for ``recordings`` and ``model``; ``setup``
-    (named ``setup_name``) instead of ``real-fixed``'s if given."""
+    (named ``setup_name``) instead of ``real-fixed``'s if given; ``match_turns`` False:
+    twins on the scenario's straight legs."""
     if walks < 2:
         raise ValueError(f"walks must be ≥ 2 (a spread of twins), got {walks}")
     setup = setup or real_fixed_setup()
@@ -243,18 +267,26 @@ def error_level(
         if not dense and rec.footprints is None:
             not_checked.append(rec.name)
             continue
-        speed = walk_stats(samples_from_recording(rec), per_stride=False).speed_mps
+        samples = samples_from_recording(rec)
+        speed = walk_stats(samples, per_stride=False).speed_mps
         if not math.isfinite(speed):
             not_checked.append(rec.name)
             continue
         duration = max(rec.duration_s, MIN_DURATION_S)
+        turn = twin_turn(samples) if match_turns else None
         twins = twin_recordings(
-            model, walks, 100_000 * seed + r, twin_speed(speed), duration, footprints=not dense
+            model,
+            walks,
+            100_000 * seed + r,
+            twin_speed(speed),
+            duration,
+            footprints=not dense,
+            turn_per_stride_rad=turn,
         )
         errors = np.array([lane_errors(t, setup, {})[0] for t in twins])
         own = float(lane_errors(rec, setup, {})[0])
         measure = "PyShoe ARMSE" if dense else "footprint error"
-        rows.append(RecordingLevel(rec.name, speed, rec.duration_s, own, errors, measure))
+        rows.append(RecordingLevel(rec.name, speed, rec.duration_s, own, errors, measure, turn))
     return ErrorLevelReport(model.name, walks, seed, rows, not_checked, setup_name)
 
 

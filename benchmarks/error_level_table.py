@@ -3,8 +3,9 @@ simulator models at several SHOE thresholds, on the 23 PyShoe development trials
 ARMSE) and the 8 hallway walks (``*_LLIO.mat``; mean footprint error)
 (docs/SIM_TO_REAL.md, "Matched twins").
 
-Each recording against 20 simulated twins of its walking speed (±10 %) and length, per
-model; the filter is ``real-fixed``'s with its threshold γ replaced by each value of
+Each recording against 20 simulated twins of its walking speed (±10 %), length and turn
+per stride (``--straight-twins``: the scenario's straight legs, as the table was first
+measured), per model; the filter is ``real-fixed``'s with its threshold γ replaced by each value of
 ``--gammas`` (``real-fixed``'s own 2.25·10⁷ first). Per (model, γ): the trials covered
 by their twins' 5–95 % range, the geometric mean of twins' median over the trial's
 ARMSE, and the mean percentile (50 ± 6.0 for 23 trials if the twins were the trials'
@@ -45,21 +46,35 @@ GAMMAS = (2.25e7, 1.3e8, 1.3e9)
 
 
 def run(
-    pyshoe: Path, hallway: Path, gammas: tuple[float, ...], walks: int, seed: int
+    pyshoe: Path,
+    hallway: Path,
+    gammas: tuple[float, ...],
+    walks: int,
+    seed: int,
+    models: tuple[str, ...] = MODEL_NAMES,
+    match_turns: bool = True,
 ) -> dict[str, Any]:
     sets = {
         "PyShoe trials": [load_recording(p) for p in sorted(pyshoe.glob("*.mat"))],
         "hallway walks": [load_recording(p) for p in sorted(hallway.glob("*_LLIO.mat"))],
     }
     base = real_fixed_setup()
-    out: dict[str, Any] = {"walks": walks, "seed": seed, "gammas": list(gammas), "rows": []}
-    for name in MODEL_NAMES:
+    out: dict[str, Any] = {
+        "walks": walks,
+        "seed": seed,
+        "gammas": list(gammas),
+        "twins": "same turn per stride" if match_turns else "straight legs",
+        "rows": [],
+    }
+    for name in models:
         model = MODELS[name] if name in MODELS else model_from_json(name)
         for gamma in gammas:
             detector = replace(base.filter.detector, threshold=gamma)
             setup = replace(base, filter=replace(base.filter, detector=detector))
             for set_name, recordings in sets.items():
-                report = error_level(recordings, model, walks, seed, setup, f"γ = {gamma:.3g}")
+                report = error_level(
+                    recordings, model, walks, seed, setup, f"γ = {gamma:.3g}", match_turns
+                )
                 summary = report.to_json()
                 summary.pop("rows")
                 out["rows"].append({"set": set_name, "gamma": gamma, **summary})
@@ -87,11 +102,27 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0, help="simulation seed (development)")
     parser.add_argument("--json", type=Path, help="also write the result here")
     parser.add_argument("--load", type=Path, help="a stored --json result: run nothing")
+    parser.add_argument(
+        "--models", nargs="+", default=list(MODEL_NAMES), help="model names or JSON files"
+    )
+    parser.add_argument(
+        "--straight-twins",
+        action="store_true",
+        help="twins on the scenario's straight legs instead of the recording's turn per stride",
+    )
     args = parser.parse_args()
     if args.load:
         result = json.loads(args.load.read_text())
     else:
-        result = run(args.pyshoe, args.hallway, GAMMAS, args.walks, args.seed)
+        result = run(
+            args.pyshoe,
+            args.hallway,
+            GAMMAS,
+            args.walks,
+            args.seed,
+            tuple(args.models),
+            not args.straight_twins,
+        )
     print_table(result)
     if args.json:
         args.json.write_text(json.dumps(result, indent=1) + "\n")

@@ -41,6 +41,8 @@ from agents.cli_options import speed_config
 from agents.evaluate import evaluate
 from baselines.tuned import result_key
 from pednav_env.calibration.compare import MODELS
+from pednav_env.calibration.path_turns import footfall_points, stride_turns
+from pednav_env.calibration.sources import load_walk
 from pednav_env.io import load_recording
 from pednav_env.replay.metrics import pyshoe_armse_as_published, track_errors
 from pednav_env.replay.runner import prepare, run_prepared
@@ -110,14 +112,29 @@ REPLAYED_SEED = 22_600
 #: Regimes of the replayed walks: :data:`REGIMES` and the PyShoe trials' own speeds
 #: (0.3–1.4 m/s, their walking speeds from truth; added after the first two ran).
 REPLAYED_REGIMES = {**REGIMES, "sim 0.3–1.4 m/s (the trials' speeds)": (0.3, 1.4)}
+#: The trials' speeds on circles: every leg turns per stride by the PyShoe trials' own
+#: turn (their pooled 25th–75th percentile of |turn per stride|,
+#: :func:`trials_turn_range`; added after the three above ran).
+CIRCLES = "sim 0.3–1.4 m/s on circles (the trials' speeds and turns)"
 #: Their length (s): ``agents.choose_shoe``'s simulated walks, the PyShoe trials' 17–56 s.
 REPLAYED_DURATION_S = (30.0, 60.0)
 
 
-def replayed(walks: int, seed: int = REPLAYED_SEED) -> dict[str, Any]:
+def trials_turn_range(pyshoe: Path) -> tuple[float, float]:
+    """The pooled 25th and 75th percentile of the PyShoe trials' |turn per stride|
+    (rad; :mod:`pednav_env.calibration.path_turns`, from their VICON at stance)."""
+    turns = [stride_turns(footfall_points(load_walk(p))) for p in sorted(pyshoe.glob("*.mat"))]
+    lo, hi = np.percentile(np.abs(np.concatenate(turns)), [25.0, 75.0])
+    return float(lo), float(hi)
+
+
+def replayed(
+    walks: int, seed: int = REPLAYED_SEED, circle_turn_rad: tuple[float, float] | None = None
+) -> dict[str, Any]:
     """Simulated walks scored the way the recordings are: ``walks`` calibrated walks
     per regime (30–60 s, ``agents.choose_shoe.simulated_recordings``) replayed by
     ``pednav run``'s runner with ``real-fixed``'s setup and each γ. Per regime and γ:
+    with ``circle_turn_rad`` also :data:`CIRCLES` at that turn per stride;
     the mean over walks of PyShoe's ARMSE (rotation fitted on the whole track, the
     recordings' measure) and of the same error with the rotation fitted on the
     first 0.8 m only (PyShoe's published alignment: a heading error that grows
@@ -126,9 +143,12 @@ def replayed(walks: int, seed: int = REPLAYED_SEED) -> dict[str, Any]:
     setup = real_fixed_setup()
     knobs = threshold_knobs(setup, THRESHOLDS)
     out = {}
-    for name, speed in REPLAYED_REGIMES.items():
+    regimes = [(name, speed, None) for name, speed in REPLAYED_REGIMES.items()]
+    if circle_turn_rad is not None:
+        regimes.append((CIRCLES, (0.3, 1.4), circle_turn_rad))
+    for name, speed, turn in regimes:
         recordings = simulated_recordings(
-            MODELS["calibrated"], walks, seed, speed, REPLAYED_DURATION_S
+            MODELS["calibrated"], walks, seed, speed, REPLAYED_DURATION_S, turn
         )
         whole = np.full((walks, len(THRESHOLDS)), np.inf)
         start = np.full((walks, len(THRESHOLDS)), np.inf)
@@ -147,6 +167,7 @@ def replayed(walks: int, seed: int = REPLAYED_SEED) -> dict[str, Any]:
             "diverged_walks": [int(v) for v in np.sum(~np.isfinite(whole), axis=0)],
             "mean_error_m": [float(v) for v in whole[kept].mean(axis=0)],
             "mean_error_start_rotation_m": [float(v) for v in start[kept].mean(axis=0)],
+            "turn_per_stride_rad": None if turn is None else list(turn),
         }
     return out
 
@@ -224,10 +245,11 @@ def plot(result: dict[str, Any], path: Path) -> None:
         for name in ("PyShoe trials (ARMSE)", "hallway walks (footprint error)"):
             color, line, marker = styles[name]
             ratio_curve(ax, curves[name]["mean_error_m"], color, line, marker, name)
-        colors = ("C0", "C3", "C2")
+        colors = ("C0", "C3", "C2", "C4")
         for color, (name, c) in zip(colors, replayed_curves.items(), strict=False):
             label = f"{name} (ARMSE, {c['walks_kept']} of {c['walks']} walks)"
-            ratio_curve(ax, c["mean_error_m"], color, ":", "^", label)
+            marker = "D" if c.get("turn_per_stride_rad") else "^"
+            ratio_curve(ax, c["mean_error_m"], color, ":", marker, label)
         ax.set_title("Simulated walks scored the way recordings are", fontsize=10)
     for ax in axes[0]:
         ax.axvline(GAMMA_0, color="0.5", linewidth=1, linestyle=":", label="real-fixed's γ")
@@ -283,7 +305,7 @@ def main() -> None:
             "recorded": recorded(args.pyshoe, args.hallway),
         }
     if args.replayed:
-        result["replayed"] = replayed(args.replayed)
+        result["replayed"] = replayed(args.replayed, circle_turn_rad=trials_turn_range(args.pyshoe))
     print_table(result)
     if args.json:
         args.json.write_text(json.dumps(result, indent=1) + "\n")

@@ -30,8 +30,10 @@ import numpy as np
 
 from benchmarks.sim_error_budget import arms
 from pednav_env.calibration.compare import SimModel
+from pednav_env.calibration.path_turns import footfall_points, stride_turns
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import WalkSamples
+from pednav_env.calibration.swing_attitude import attitude_profile
 from pednav_env.calibration.swing_phases import fast_below, swing_phase_profile
 
 SPEED_MPS, DURATION_S, SEED = (0.3, 1.4), (30.0, 60.0), 22_600
@@ -69,16 +71,23 @@ def run(
         "stance": "truth speed" if truth_speed_stance else "labels / simulator truth",
     }
     trials = [stance_of(load_walk(p)) for p in sorted(pyshoe.glob("*.mat"))]
+    turns = np.abs(np.concatenate([stride_turns(footfall_points(w)) for w in trials]))
+    circle = tuple(float(v) for v in np.percentile(turns, [25.0, 75.0]))
+    result["trials_turn_per_stride_rad"] = list(circle)
     result["PyShoe trials"] = {
         **swing_phase_profile(trials, bins),
         "fast_below": fast_below(trials, FAST_BELOW_GAMMAS),
+        "attitude": attitude_profile(trials, bins),
     }
-    for name, model in models().items():
-        truth, imu = model.batch(SPEED_MPS, walks, seed, DURATION_S)
+    arms = [(name, model, None) for name, model in models().items()]
+    arms.append(("simulated, calibrated, circles", models()["simulated, calibrated"], circle))
+    for name, model, turn in arms:
+        truth, imu = model.batch(SPEED_MPS, walks, seed, DURATION_S, turn)
         sims = [stance_of(samples_from_simulation(truth, imu, i)) for i in range(walks)]
         result[name] = {
             **swing_phase_profile(sims, bins),
             "fast_below": fast_below(sims, FAST_BELOW_GAMMAS),
+            "attitude": attitude_profile(sims, bins),
         }
     return result
 
@@ -104,6 +113,12 @@ def print_table(result: dict[str, Any]) -> None:
                 f"  {p['sagittal_rate_median_rad_s'][k]:8.2f}"
                 f"  {p['off_sagittal_rate_median_rad_s'][k]:8.2f}  {p['fast_still_share'][k]:12.3f}"
             )
+        att = p.get("attitude")
+        if att:
+            print(f"  swing attitude ({att['swings']} swings), medians by phase bin, rad:")
+            for key in ("yaw_median_rad", "pitch_median_rad", "roll_median_rad"):
+                values = " ".join("   —  " if v is None else f"{v:6.3f}" for v in att[key])
+                print(f"    {key.split('_')[0]:6s} {values}")
 
 
 def plot(result: dict[str, Any], path: Path) -> None:
@@ -122,6 +137,7 @@ def plot(result: dict[str, Any], path: Path) -> None:
         "simulated, shorter heel strike": ("C1", "--", "x"),
         "simulated, mid pitch at the midpoint": ("C4", ":", "+"),
         "simulated, swing roll": ("C5", "-.", "*"),
+        "simulated, calibrated, circles": ("C6", "-", "D"),
     }
     panels = (
         ("speed_median_mps", "median foot speed (m/s)"),

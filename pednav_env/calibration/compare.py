@@ -89,15 +89,23 @@ class SimModel:
         walks: int,
         seed: int,
         duration_s: tuple[float, float] = SIM_DURATION_S,
+        turn_per_stride_rad: tuple[float, float] | None = None,
     ) -> tuple[FootTrajectory, ImuMeasurements]:
         """``walks`` simulated walks with every stride's speed in ``speed_mps``,
         ``duration_s`` long, truth and IMU readings; walk i draws from
-        ``default_rng([seed, i])`` (its walker, route and IMU errors)."""
+        ``default_rng([seed, i])`` (its walker, route and IMU errors). With
+        ``turn_per_stride_rad`` every leg walks a circle
+        (:class:`pednav_env.gait.speed_route.SpeedRouteConfig`)."""
         rngs = [np.random.default_rng([seed, i]) for i in range(walks)]
         routes = []
         for rng in rngs:
             motion = None if self.stance is None else self.stance.draw(rng)
-            cfg = SpeedRouteConfig(speed_mps=speed_mps, duration_s=duration_s, stance_motion=motion)
+            cfg = SpeedRouteConfig(
+                speed_mps=speed_mps,
+                duration_s=duration_s,
+                stance_motion=motion,
+                turn_per_stride_rad=turn_per_stride_rad,
+            )
             routes.append(speed_route(rng, cfg))
         truth = simulate_foot(routes, FootSimConfig(rate_hz=SIM_RATE_HZ), full_state=False)
         spec = IMU_GRADES[self.imu_grade]()

@@ -32,6 +32,14 @@ class SpeedRouteConfig:
     running cycles 0.65–0.8 s as in
     :class:`pednav_env.gait.foot_route.RouteRandomization`. Each leg draws
     one speed and each stride varies it by ±``speed_jitter`` (relative).
+
+    Each leg starts with a turn spread over its first strides (at most
+    ``max_turn_per_stride`` each) and walks straight on, unless
+    ``turn_per_stride_rad`` (lo, hi) is given: then every stride of a leg turns by
+    the leg's own heading change, drawn in [lo, hi] rad with a random sign (a leg
+    on a circle: the PyShoe VICON trials walk circles of about 1 m radius, about
+    1 rad per stride; docs/SIM_TO_REAL.md, "The swing in three axes"). Without it
+    the draws are those of a route without the option.
     """
 
     speed_mps: tuple[float, float] = (0.8, 1.3)
@@ -43,6 +51,7 @@ class SpeedRouteConfig:
     speed_jitter: float = 0.05
     run_from_mps: float = 2.0
     stance_motion: StanceMotion | None = None
+    turn_per_stride_rad: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         lo, hi = self.speed_mps
@@ -65,6 +74,13 @@ class SpeedRouteConfig:
             raise ValueError(
                 f"SpeedRouteConfig.speed_jitter must be in [0, 0.5), got {self.speed_jitter}"
             )
+        if self.turn_per_stride_rad is not None:
+            lo, hi = (float(v) for v in self.turn_per_stride_rad)
+            if not (0.0 <= lo <= hi <= math.pi / 2):
+                raise ValueError(
+                    "SpeedRouteConfig.turn_per_stride_rad must satisfy 0 ≤ lo ≤ hi ≤ π/2 rad, "
+                    f"got {self.turn_per_stride_rad}"
+                )
 
 
 def gait_for_speed(speed_mps: float, run_from_mps: float = 2.0) -> Gait:
@@ -186,12 +202,18 @@ def speed_route(rng: np.random.Generator, config: SpeedRouteConfig | None = None
         turn_total = rng.uniform(-math.pi, math.pi)
         n_turn = max(1, math.ceil(abs(turn_total) / cfg.max_turn_per_stride))
         stop = rng.uniform(*cfg.stop_s) if rng.uniform() < cfg.stop_probability else 0.0
+        curve = None
+        if cfg.turn_per_stride_rad is not None:
+            curve = rng.uniform(*cfg.turn_per_stride_rad) * (1.0 if rng.uniform() < 0.5 else -1.0)
         for i in range(n_leg):
             v = leg_speed * (1.0 + cfg.speed_jitter * rng.uniform(-1.0, 1.0))
             v = min(max(v, lo), hi)
             gait = gait_for_speed(v, cfg.run_from_mps)
             shape = speed_stride_shape(rng, v, gait, cfg.stance_motion)
-            turn = turn_total / n_turn if i < n_turn else 0.0
+            if curve is None:
+                turn = turn_total / n_turn if i < n_turn else 0.0
+            else:
+                turn = curve
             s = Stride(shape, heading_change=turn, stop_s=stop if i == 0 else 0.0)
             if elapsed + shape.cycle_s + s.stop_s > target and strides:
                 phases = tuple(rng.uniform(0, 2 * math.pi, 3))

@@ -19,9 +19,12 @@ from agents.error_level import (
     error_level,
     twin_recordings,
     twin_speed,
+    twin_turn,
     write_figure,
 )
 from pednav_env.calibration.compare import MODELS
+from pednav_env.calibration.path_turns import turn_range
+from pednav_env.calibration.sources import samples_from_recording
 from pednav_env.io import load_recording
 from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
 
@@ -116,6 +119,26 @@ def test_recordings_with_truth_get_twins():
     assert other.rows[0].twins_m.tolist() != row.twins_m.tolist()
     with pytest.raises(ValueError, match="walks must be ≥ 2"):
         error_level([rec], MODELS["calibrated"], walks=1)
+
+
+def test_twins_walk_the_recordings_turns():
+    # the PyShoe trial walks circles: its twins turn within its own range per stride;
+    # measured on the twins' truth, not taken from the twins' draws
+    rec = load_recording(PYSHOE_SAMPLE)
+    turn = twin_turn(samples_from_recording(rec))
+    assert turn is not None and turn[0] > 0.3  # the trials' circles, ~1 rad per stride
+    report = error_level([rec], MODELS["calibrated"], walks=2, seed=3)
+    assert report.rows[0].turn_rad == turn
+    assert report.rows[0].to_json()["twin_turn_per_stride_rad"] == list(turn)
+    assert "same turn per stride" in report.format_text()
+    twins = twin_recordings(MODELS["calibrated"], 2, 7, (0.9, 1.1), 30.0, False, turn)
+    for t in twins:
+        lo, hi = turn_range(samples_from_recording(t))
+        assert turn[0] - 0.1 < lo <= hi < turn[1] + 0.1
+    straight = error_level([rec], MODELS["calibrated"], 2, 3, match_turns=False)
+    assert straight.rows[0].turn_rad is None
+    assert "same turn per stride" not in straight.format_text()
+    assert straight.rows[0].twins_m.tolist() != report.rows[0].twins_m.tolist()
 
 
 def test_cli_nav(tmp_path, capsys: pytest.CaptureFixture[str]):

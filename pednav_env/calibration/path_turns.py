@@ -1,0 +1,91 @@
+"""How much a walk's path turns per stride, from its reference (docs/SIM_TO_REAL.md,
+"The swing in three axes").
+
+A footfall point is a footprint (walks with footprints) or the mean truth position over
+a stance run (walks with a truth track: stance from the walk's labels or the simulator's
+truth, else from the truth velocity, cleaned as :mod:`pednav_env.calibration.stats`
+cleans labels). Consecutive points closer than :data:`MIN_STRIDE_M` are one footfall
+(a stand, a split stance). A stride's turn is the change of heading from one footfall
+step to the next, wrapped to [−π, π): a walk on a circle of radius r with strides of
+length L turns by about L / r per stride.
+
+The PyShoe VICON trials walk circles in the capture volume, about 1 rad per stride;
+the hallway walks turn a few hundredths to a few tenths of a radian.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from pednav_env.calibration.stats import (
+    LABEL_MIN_RUN_S,
+    StanceSource,
+    WalkSamples,
+    clean_labels,
+    log10_shoe,
+    runs,
+    walking_part,
+)
+from pednav_env.rotations import wrap_angle
+
+Array = NDArray[np.float64]
+
+#: Footfall points closer than this (m) are one footfall.
+MIN_STRIDE_M = 0.2
+#: Fewest stride turns a walk needs for :func:`turn_range`.
+MIN_TURNS = 3
+
+
+def footfall_points(samples: WalkSamples) -> Array:
+    """``(K, 2)`` horizontal footfall points (m; module docstring); ``(0, 2)`` when the
+    walk has neither footprints nor a truth track, or its stance comes from the detector
+    rule only."""
+    s = samples
+    if s.footprints_m is not None:
+        return np.asarray(s.footprints_m, dtype=float)[:, :2]
+    if s.truth_pos is None:
+        return np.zeros((0, 2))
+    rate = float(s.rate_hz)
+    source, stance, _, _ = walking_part(s, log10_shoe(s.omega_b, s.f_b, rate, s.g))
+    if source == StanceSource.DETECTOR:
+        return np.zeros((0, 2))
+    stance = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
+    points = []
+    for a, b in zip(*runs(stance), strict=True):
+        xy = np.asarray(s.truth_pos[a:b, :2], dtype=float)
+        ok = np.all(np.isfinite(xy), axis=1)
+        if ok.any():
+            points.append(xy[ok].mean(axis=0))
+    return np.array(points).reshape(-1, 2)
+
+
+def stride_turns(points_m: Array, min_stride_m: float = MIN_STRIDE_M) -> Array:
+    """Per stride, the heading change (rad, [−π, π)) between consecutive footfall steps
+    of ``points_m`` ``(K, 2)``, points closer than ``min_stride_m`` merged."""
+    pts = np.asarray(points_m, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise ValueError(f"points_m must be (K, 2), got shape {pts.shape}")
+    if not np.all(np.isfinite(pts)):
+        raise ValueError("points_m must be finite")
+    if not (np.isfinite(min_stride_m) and min_stride_m > 0):
+        raise ValueError(f"min_stride_m must be > 0, got {min_stride_m!r}")
+    kept: list[Array] = []
+    for p in pts:
+        if not kept or np.hypot(*(p - kept[-1])) >= min_stride_m:
+            kept.append(p)
+    if len(kept) < 3:
+        return np.zeros(0)
+    steps = np.diff(np.array(kept), axis=0)
+    heading = np.arctan2(steps[:, 1], steps[:, 0])
+    return wrap_angle(np.diff(heading))
+
+
+def turn_range(samples: WalkSamples) -> tuple[float, float] | None:
+    """The 25th and 75th percentile of the walk's |turn per stride| (rad), None with
+    fewer than :data:`MIN_TURNS` strides."""
+    turns = np.abs(stride_turns(footfall_points(samples)))
+    if turns.size < MIN_TURNS:
+        return None
+    lo, hi = np.percentile(turns, [25.0, 75.0])
+    return float(lo), float(hi)

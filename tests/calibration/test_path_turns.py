@@ -1,0 +1,69 @@
+"""Turn per stride from footfall points (calibration.path_turns), and circling routes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pednav_env.calibration.compare import MODELS
+from pednav_env.calibration.path_turns import footfall_points, stride_turns, turn_range
+from pednav_env.calibration.sources import samples_from_simulation
+from pednav_env.calibration.stats import WalkSamples
+from pednav_env.gait.speed_route import SpeedRouteConfig
+
+
+def test_turns_of_a_square_and_a_zigzag():
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.0, 0.0]])
+    np.testing.assert_allclose(stride_turns(square), [math.pi / 2] * 3)
+    zigzag = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 1.0], [3.0, 1.0]])
+    np.testing.assert_allclose(stride_turns(zigzag), [math.pi / 4, -math.pi / 4])
+
+
+def test_points_closer_than_a_stride_are_one_footfall():
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], [1.05, 0.0], [2.0, 0.0], [2.0, 1.0]])
+    np.testing.assert_allclose(stride_turns(pts), [0.0, math.pi / 2])
+    assert stride_turns(pts[:2]).size == 0
+
+
+@pytest.mark.parametrize(
+    ("points", "kwargs", "message"),
+    [
+        (np.zeros((4, 3)), {}, "points_m must be"),
+        (np.array([[0.0, 0.0], [np.nan, 1.0], [2.0, 2.0]]), {}, "finite"),
+        (np.zeros((4, 2)), {"min_stride_m": 0.0}, "min_stride_m"),
+    ],
+)
+def test_bad_points(points, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        stride_turns(points, **kwargs)
+
+
+def test_footprints_are_the_footfall_points():
+    prints = np.array([[0.0, 0.0], [0.0, 1.0], [-1.0, 1.0], [-1.0, 0.0]])
+    walk = WalkSamples(
+        np.zeros((100, 3)),
+        np.tile([0.0, 0.0, 9.81], (100, 1)),
+        100.0,
+        footfall_index=np.array([10, 40, 70, 90]),
+        footprints_m=prints,
+    )
+    np.testing.assert_array_equal(footfall_points(walk), prints)
+    assert turn_range(walk) is None  # two turns only
+
+
+@pytest.mark.parametrize("bad", [(0.5, 0.2), (-0.1, 0.2), (0.2, 2.0), (float("nan"), 0.3)])
+def test_route_turn_range_is_checked(bad):
+    with pytest.raises(ValueError, match="turn_per_stride_rad"):
+        SpeedRouteConfig(turn_per_stride_rad=bad)
+
+
+def test_circling_walks_turn_as_drawn_measured_from_their_truth():
+    truth, imu = MODELS["calibrated"].batch((0.9, 1.1), 4, 5, (30.0, 30.0), (0.8, 1.0))
+    for i in range(4):
+        lo, hi = turn_range(samples_from_simulation(truth, imu, i))
+        assert 0.7 < lo <= hi < 1.1
+    truth, imu = MODELS["calibrated"].batch((0.9, 1.1), 4, 5, (30.0, 30.0))
+    straight = [turn_range(samples_from_simulation(truth, imu, i)) for i in range(4)]
+    assert all(r is not None and r[0] < 0.05 for r in straight)
