@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 
 from agents.choose_shoe import lane_errors
 from pednav_env.calibration.compare import ENVELOPE_PERCENT, SimModel, coverage_interval
-from pednav_env.calibration.path_turns import turn_range
+from pednav_env.calibration.path_turns import route_turn_range
 from pednav_env.calibration.sources import recording_from_simulation, samples_from_recording
 from pednav_env.calibration.stats import WalkSamples, walk_stats
 from pednav_env.io import Footprints, Recording
@@ -211,14 +211,10 @@ def twin_speed(speed_mps: float) -> tuple[float, float]:
 
 
 def twin_turn(samples: WalkSamples) -> tuple[float, float] | None:
-    """The twins' turn per stride range (rad) for a recording: its
-    :func:`~pednav_env.calibration.path_turns.turn_range`, at most π/2 (the route's
-    limit); None without enough strides."""
-    turn = turn_range(samples)
-    if turn is None:
-        return None
-    top = math.pi / 2
-    return min(turn[0], top), min(turn[1], top)
+    """The twins' turn per stride range (rad) for a recording:
+    :func:`~pednav_env.calibration.path_turns.route_turn_range` (at most π/2, the
+    route's limit); None without enough strides."""
+    return route_turn_range(samples)
 
 
 def twin_recordings(

@@ -75,6 +75,15 @@ studies (:data:`pednav_env.calibration.parameters.GAIT_PRIORS`: foot flat at 1 m
 0.12–0.20; Perry & Burnfield 2010, Levangie & Norkin, Kirtley et al. 1985);
 a warm start outside is clipped to it. Stored in ``settings`` (``gait_priors``).
 Candidate v8 of docs/SIM_TO_REAL_CANDIDATES.md.
+
+``--match-turns`` gives every recording its turn per stride (the 25th–75th percentile
+of its |turn per stride| from its truth at stance or its footprints, at most π/2,
+:func:`pednav_env.calibration.path_turns.route_turn_range`), so that the simulated walks of
+the fit and of the checks walk the circles of the band's recordings
+(:func:`pednav_env.calibration.compare.band_turns`; the PyShoe trials turn about 1 rad
+per stride) instead of the scenario's straight legs; the held-out check's walks take the
+held-out recordings' turns, as they take their speeds. Stored in ``settings``
+(``match_turns``, absent without it); ``--recheck`` reads it. Candidate v9.
 """
 
 from __future__ import annotations
@@ -82,7 +91,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -110,6 +119,7 @@ from pednav_env.calibration.parameters import (
     SWING_SPEED,
     randomization,
 )
+from pednav_env.calibration.path_turns import route_turn_range
 from pednav_env.calibration.sources import load_walk
 from pednav_env.calibration.stats import WalkStats, walk_stats
 
@@ -266,11 +276,12 @@ def model_options(heel_rocker: bool) -> dict:
 
 
 def load_recordings(
-    args: argparse.Namespace, strides: bool = False
+    args: argparse.Namespace, strides: bool = False, turns: bool = False
 ) -> tuple[list[WalkStats], dict[str, RecordedStrides] | None]:
     """The statistics of the PyShoe trials and the hallway walks (``_LLIO.mat``),
     and with ``strides`` each recording's strides (:func:`recorded_strides`) by
-    walk name; every file is read once."""
+    walk name; with ``turns`` each recording's turn per stride in its statistics
+    (``--match-turns``); every file is read once."""
     if not (args.pyshoe and args.hallway):
         raise SystemExit("--pyshoe and --hallway are required (with --recheck too)")
     paths = sorted(Path(args.pyshoe).glob("*.mat"))
@@ -278,7 +289,10 @@ def load_recordings(
     stats, by_name = [], {}
     for p in paths:
         samples = load_walk(p)
-        stats.append(walk_stats(samples))
+        walk = walk_stats(samples)
+        if turns:
+            walk = replace(walk, turn_per_stride_rad=route_turn_range(samples))
+        stats.append(walk)
         if strides:
             by_name[samples.name] = recorded_strides(samples)
     return stats, (by_name if strides else None)
@@ -343,6 +357,12 @@ def main() -> None:
         "0.12-0.20; Perry & Burnfield 2010, Levangie & Norkin, Kirtley et al. 1985); "
         "a warm start outside is clipped",
     )
+    ap.add_argument(
+        "--match-turns",
+        action="store_true",
+        help="simulated walks walk the circles of their band's recordings (each recording's "
+        "25th-75th percentile of |turn per stride|) instead of straight legs",
+    )
     ap.add_argument("--merge", nargs="+", metavar="JSON", help="join the outputs of parts")
     ap.add_argument(
         "--recheck",
@@ -362,9 +382,9 @@ def main() -> None:
             result["parts"].update(part["parts"])
             result.update({k: v for k, v in part.items() if k != "parts"})
         if args.recheck:
-            stats, _ = load_recordings(args)
-            folds = groups(stats)
             settings = result.get("settings", {})
+            stats, _ = load_recordings(args, turns=settings.get("match_turns", False))
+            folds = groups(stats)
             shared = model_options(settings.get("heel_rocker", False))
             knots = settings.get("pitch_knots", False)
             swing = settings.get("swing_term", False)
@@ -377,7 +397,7 @@ def main() -> None:
                     part["held_out"] = check(folds[name], x, options, knots, swing)
                 print(f"{name}: rechecked", flush=True)
     else:
-        stats, strides = load_recordings(args, args.cadence_law)
+        stats, strides = load_recordings(args, args.cadence_law, args.match_turns)
         result["settings"] = {
             "warm_start": args.warm_start,
             "sigma0": args.sigma0,
@@ -394,6 +414,8 @@ def main() -> None:
         }
         if args.gait_priors:  # absent without it: the shipped fit's settings unchanged
             result["settings"]["gait_priors"] = {k: list(v) for k, v in GAIT_PRIORS.items()}
+        if args.match_turns:  # likewise
+            result["settings"]["match_turns"] = True
         for part in args.parts:
             result["parts"][part] = run_part(part, stats, args, strides)
             if args.out:

@@ -90,21 +90,28 @@ class SimModel:
         seed: int,
         duration_s: tuple[float, float] = SIM_DURATION_S,
         turn_per_stride_rad: tuple[float, float] | None = None,
+        turns_per_walk: Sequence[tuple[float, float] | None] | None = None,
     ) -> tuple[FootTrajectory, ImuMeasurements]:
         """``walks`` simulated walks with every stride's speed in ``speed_mps``,
         ``duration_s`` long, truth and IMU readings; walk i draws from
         ``default_rng([seed, i])`` (its walker, route and IMU errors). With
         ``turn_per_stride_rad`` every leg walks a circle
-        (:class:`pednav_env.gait.speed_route.SpeedRouteConfig`)."""
+        (:class:`pednav_env.gait.speed_route.SpeedRouteConfig`); ``turns_per_walk``
+        (``walks`` entries) gives walk i its own, None for the scenario's legs."""
+        if turns_per_walk is not None and len(turns_per_walk) != walks:
+            raise ValueError(
+                f"turns_per_walk must have one entry per walk ({walks}), got {len(turns_per_walk)}"
+            )
         rngs = [np.random.default_rng([seed, i]) for i in range(walks)]
         routes = []
-        for rng in rngs:
+        for i, rng in enumerate(rngs):
             motion = None if self.stance is None else self.stance.draw(rng)
+            turn = turn_per_stride_rad if turns_per_walk is None else turns_per_walk[i]
             cfg = SpeedRouteConfig(
                 speed_mps=speed_mps,
                 duration_s=duration_s,
                 stance_motion=motion,
-                turn_per_stride_rad=turn_per_stride_rad,
+                turn_per_stride_rad=turn,
             )
             routes.append(speed_route(rng, cfg))
         truth = simulate_foot(routes, FootSimConfig(rate_hz=SIM_RATE_HZ), full_state=False)
@@ -121,12 +128,16 @@ class SimModel:
         seed: int,
         duration_s: tuple[float, float] = SIM_DURATION_S,
         per_stride: bool = True,
+        turns_per_walk: Sequence[tuple[float, float] | None] | None = None,
     ) -> list[WalkStats]:
         """The statistics of :meth:`batch`'s walks at the band's speeds (the open band
         up to :data:`SIM_TOP_SPEED_MPS`). ``per_stride`` as in
-        :func:`pednav_env.calibration.stats.walk_stats`."""
+        :func:`pednav_env.calibration.stats.walk_stats`; ``turns_per_walk`` as in
+        :meth:`batch`."""
         lo, hi = band
-        truth, imu = self.batch((lo, min(hi, SIM_TOP_SPEED_MPS)), walks, seed, duration_s)
+        truth, imu = self.batch(
+            (lo, min(hi, SIM_TOP_SPEED_MPS)), walks, seed, duration_s, None, turns_per_walk
+        )
         return [
             walk_stats(samples_from_simulation(truth, imu, i, f"{self.name}{i}"), per_stride)
             for i in range(walks)
@@ -371,6 +382,20 @@ class Sim2RealReport:
         return "\n".join(lines)
 
 
+def band_turns(
+    recordings: Sequence[WalkStats], walks: int
+) -> list[tuple[float, float] | None] | None:
+    """The turn per stride of each of ``walks`` simulated walks compared with
+    ``recordings`` (one band): None (the scenario's legs) unless a recording carries
+    its :attr:`~pednav_env.calibration.stats.WalkStats.turn_per_stride_rad`; then walk i
+    walks the circles of recording ⌊i·n/walks⌋ (n recordings, in the order given;
+    None for a recording without one)."""
+    if not any(r.turn_per_stride_rad is not None for r in recordings):
+        return None
+    n = len(recordings)
+    return [recordings[i * n // walks].turn_per_stride_rad for i in range(walks)]
+
+
 def compare(
     real: Sequence[WalkStats],
     model: SimModel,
@@ -380,7 +405,10 @@ def compare(
     """Recordings beside ``walks_per_band`` simulated walks per band (module docstring).
 
     Every band is simulated, with recordings or not; band k's walks use seed
-    ``[seed, k]`` streams, so bands and models are comparable run to run.
+    ``[seed, k]`` streams, so bands and models are comparable run to run. Recordings
+    that carry their turn per stride get simulated walks on the same circles
+    (:func:`band_turns`); :func:`~pednav_env.calibration.stats.walk_stats` leaves it
+    unset, so by default every walk keeps the scenario's legs.
     """
     if walks_per_band < 2:
         raise ValueError(f"walks_per_band must be ≥ 2, got {walks_per_band}")
@@ -390,7 +418,16 @@ def compare(
         band = band_of(s.speed_mps)
         (unbanded if band is None else by_band[band]).append(s)
     bands = [
-        BandComparison(b, by_band[b], model.simulate(b, walks_per_band, seed * 100 + k))
+        BandComparison(
+            b,
+            by_band[b],
+            model.simulate(
+                b,
+                walks_per_band,
+                seed * 100 + k,
+                turns_per_walk=band_turns(by_band[b], walks_per_band),
+            ),
+        )
         for k, b in enumerate(SPEED_BANDS)
     ]
     return Sim2RealReport(model.name, bands, unbanded)

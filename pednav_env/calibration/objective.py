@@ -66,6 +66,7 @@ from pednav_env.calibration.compare import (
     SPEED_BANDS,
     SimModel,
     band_of,
+    band_turns,
     stride_quietness_by_bin,
     stride_swing_by_bin,
 )
@@ -228,7 +229,10 @@ def distance(
     :func:`randomization`. Opt-in (module docstring): ``swing`` adds the swing
     term (``stride_swing``, :func:`swing_distance`); ``coverage_walks`` N > 0
     measures the coverage term on N other walks per band holding recordings (seed
-    :func:`coverage_seed`, no per-stride statistics) instead of the W1 walks."""
+    :func:`coverage_seed`, no per-stride statistics) instead of the W1 walks. A band's
+    walks walk the circles of its recordings when they carry their turn per stride
+    (:func:`pednav_env.calibration.compare.band_turns`); the bands holding recorded
+    strides only keep the scenario's legs."""
     if coverage_walks < 0:
         raise ValueError(f"distance: coverage_walks must be ≥ 0, got {coverage_walks}")
     model = SimModel("fit", GRADE, randomization(x, options, knots))
@@ -238,9 +242,10 @@ def distance(
     parts: dict[str, float] = {}
     all_sim: list[WalkStats] = []
     for k in simulate:
-        sim = model.simulate(SPEED_BANDS[k], walks, seed * 100 + k, FIT_DURATION_S, True)
-        all_sim += sim
         rec = bands.get(k, [])
+        turns = band_turns(rec, walks) if rec else None
+        sim = model.simulate(SPEED_BANDS[k], walks, seed * 100 + k, FIT_DURATION_S, True, turns)
+        all_sim += sim
         if not rec:
             continue
         weight = len(rec) / total_recordings
@@ -248,7 +253,10 @@ def distance(
             parts[name] = parts.get(name, 0.0) + weight * value
         if coverage_walks:
             cover_seed = coverage_seed(seed, k)
-            sim = model.simulate(SPEED_BANDS[k], coverage_walks, cover_seed, FIT_DURATION_S, False)
+            turns = band_turns(rec, coverage_walks)
+            sim = model.simulate(
+                SPEED_BANDS[k], coverage_walks, cover_seed, FIT_DURATION_S, False, turns
+            )
         parts["coverage"] = parts.get("coverage", 0.0) + (
             weight * COVERAGE_WEIGHT * coverage_distance(rec, sim)
         )

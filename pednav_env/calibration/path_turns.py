@@ -15,6 +15,8 @@ the hallway walks turn a few hundredths to a few tenths of a radian.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -35,6 +37,9 @@ Array = NDArray[np.float64]
 MIN_STRIDE_M = 0.2
 #: Fewest stride turns a walk needs for :func:`turn_range`.
 MIN_TURNS = 3
+#: Largest turn per stride a simulated route walks (rad;
+#: :class:`pednav_env.gait.speed_route.SpeedRouteConfig`).
+MAX_ROUTE_TURN_RAD = math.pi / 2
 
 
 def footfall_points(samples: WalkSamples) -> Array:
@@ -89,3 +94,13 @@ def turn_range(samples: WalkSamples) -> tuple[float, float] | None:
         return None
     lo, hi = np.percentile(turns, [25.0, 75.0])
     return float(lo), float(hi)
+
+
+def route_turn_range(samples: WalkSamples) -> tuple[float, float] | None:
+    """:func:`turn_range` with both ends at most :data:`MAX_ROUTE_TURN_RAD`: the turn
+    per stride of simulated walks that walk like this one (a stride that turns more, a
+    turn on the spot, is walked at the limit)."""
+    turn = turn_range(samples)
+    if turn is None:
+        return None
+    return min(turn[0], MAX_ROUTE_TURN_RAD), min(turn[1], MAX_ROUTE_TURN_RAD)

@@ -208,6 +208,11 @@ class WalkStats:
     standing_s: float
     log_shoe: Array  # log10 SHOE over the walking part
     strides: StrideStats
+    #: The walk's 25th–75th percentile of |turn per stride| (rad), when the caller
+    #: measured it (:func:`pednav_env.calibration.path_turns.turn_range`): simulated
+    #: walks compared with this one then walk circles of that turn
+    #: (:func:`pednav_env.calibration.compare.band_turns`). ``walk_stats`` leaves it None.
+    turn_per_stride_rad: tuple[float, float] | None = None
 
     @property
     def log_shoe_p10(self) -> float:

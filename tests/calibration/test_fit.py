@@ -143,6 +143,7 @@ def test_distance_draws_the_coverage_walks_from_their_own_seeds(
         seed: int,
         duration_s: tuple[float, float],
         per_stride: bool = True,
+        turns_per_walk: object = None,
     ) -> list[WalkStats]:
         calls.append((SPEED_BANDS.index(band), walks, seed, per_stride))
         return [_walk(6.0 + 0.1 * i, [1.0] * 12, [6.0] * 12, [3.0] * 12) for i in range(walks)]

@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from testdata import PYSHOE_SAMPLE
 
-from pednav_env.calibration.compare import MODELS
+from pednav_env.calibration.compare import MODELS, band_turns, compare
 from pednav_env.calibration.path_turns import footfall_points, stride_turns, turn_range
-from pednav_env.calibration.sources import samples_from_simulation
-from pednav_env.calibration.stats import WalkSamples
+from pednav_env.calibration.sources import load_walk, samples_from_simulation
+from pednav_env.calibration.stats import WalkSamples, walk_stats
 from pednav_env.gait.speed_route import SpeedRouteConfig
 
 
@@ -67,3 +70,39 @@ def test_circling_walks_turn_as_drawn_measured_from_their_truth():
     truth, imu = MODELS["calibrated"].batch((0.9, 1.1), 4, 5, (30.0, 30.0))
     straight = [turn_range(samples_from_simulation(truth, imu, i)) for i in range(4)]
     assert all(r is not None and r[0] < 0.05 for r in straight)
+
+
+def test_each_walk_its_own_turn():
+    truth, imu = MODELS["calibrated"].batch(
+        (0.9, 1.1), 2, 5, (30.0, 30.0), turns_per_walk=[(0.8, 1.0), None]
+    )
+    lo, hi = turn_range(samples_from_simulation(truth, imu, 0))
+    assert 0.7 < lo <= hi < 1.1
+    assert turn_range(samples_from_simulation(truth, imu, 1))[0] < 0.05
+    with pytest.raises(ValueError, match="turns_per_walk"):
+        MODELS["calibrated"].batch((0.9, 1.1), 2, 5, (30.0, 30.0), turns_per_walk=[None])
+
+
+def _stats(name: str, turn):
+    return SimpleNamespace(name=name, turn_per_stride_rad=turn)
+
+
+def test_band_turns_spread_the_recordings_over_the_walks():
+    recs = [_stats("a", (0.1, 0.2)), _stats("b", None), _stats("c", (1.0, 1.2))]
+    assert band_turns([_stats("a", None), _stats("b", None)], 4) is None
+    assert band_turns(recs, 6) == [(0.1, 0.2), (0.1, 0.2), None, None, (1.0, 1.2), (1.0, 1.2)]
+    assert band_turns(recs, 2) == [(0.1, 0.2), None]
+
+
+def test_compare_walks_the_circles_of_recordings_that_carry_their_turn():
+    stats = walk_stats(load_walk(PYSHOE_SAMPLE))
+    assert stats.turn_per_stride_rad is None  # walk_stats leaves it unset
+    circling = replace(stats, turn_per_stride_rad=(0.8, 1.0))
+    plain = compare([stats], MODELS["calibrated"], 2, 3)
+    turned = compare([circling], MODELS["calibrated"], 2, 3)
+    band = next(i for i, b in enumerate(plain.bands) if b.real)
+    assert not np.array_equal(plain.bands[band].sim[0].log_shoe, turned.bands[band].sim[0].log_shoe)
+    other = next(i for i, b in enumerate(plain.bands) if not b.real)  # no recording: no circles
+    np.testing.assert_array_equal(
+        plain.bands[other].sim[0].log_shoe, turned.bands[other].sim[0].log_shoe
+    )
