@@ -41,7 +41,7 @@ from agents.cli_options import speed_config
 from agents.evaluate import evaluate
 from baselines.tuned import result_key
 from pednav_env.calibration.compare import MODELS
-from pednav_env.calibration.path_turns import footfall_points, stride_turns
+from pednav_env.calibration.path_turns import pooled_turn_range
 from pednav_env.calibration.sources import load_walk
 from pednav_env.io import load_recording
 from pednav_env.replay.metrics import pyshoe_armse_as_published, track_errors
@@ -123,9 +123,7 @@ REPLAYED_DURATION_S = (30.0, 60.0)
 def trials_turn_range(pyshoe: Path) -> tuple[float, float]:
     """The pooled 25th and 75th percentile of the PyShoe trials' |turn per stride|
     (rad; :mod:`pednav_env.calibration.path_turns`, from their VICON at stance)."""
-    turns = [stride_turns(footfall_points(load_walk(p))) for p in sorted(pyshoe.glob("*.mat"))]
-    lo, hi = np.percentile(np.abs(np.concatenate(turns)), [25.0, 75.0])
-    return float(lo), float(hi)
+    return pooled_turn_range([load_walk(p) for p in sorted(pyshoe.glob("*.mat"))])
 
 
 def replayed(

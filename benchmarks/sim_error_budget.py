@@ -29,10 +29,18 @@ and walkers; each arm changes one part):
   (``StanceRandomization.heel_rocker``: the heel comes to rest on its footfall instead of
   running past it and sliding back; docs/SIM_TO_REAL_CANDIDATES.md), not refitted.
 
+With ``--circles`` every leg of every simulated walk is on the trials' circles: each
+stride turns by the leg's drawn heading change in the trials' pooled 25th–75th
+percentile of |turn per stride| (0.79–1.43 rad;
+:func:`pednav_env.calibration.path_turns.pooled_turn_range`), the PyShoe trials'
+kind of walk (docs/SIM_TO_REAL.md, "The trials walk circles").
+
 Nothing is chosen on these runs.
 
     PYTHONPATH=. .venv/bin/python benchmarks/sim_error_budget.py --walks 100 \\
         --json benchmarks/results/sim_error_budget.json
+    PYTHONPATH=. .venv/bin/python benchmarks/sim_error_budget.py --walks 100 --circles \\
+        --json benchmarks/results/sim_error_budget_circles.json
 """
 
 from __future__ import annotations
@@ -48,6 +56,8 @@ from scipy.stats import bootstrap
 
 from agents.choose_shoe import simulated_recordings, threshold_sweep
 from pednav_env.calibration.compare import SimModel
+from pednav_env.calibration.path_turns import pooled_turn_range
+from pednav_env.calibration.sources import load_walk
 from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.io import load_recording
 from pednav_env.replay.setup import real_fixed_setup
@@ -120,18 +130,21 @@ def summary(errors: np.ndarray) -> dict[str, Any]:
     }
 
 
-def run(walks: int, seed: int, pyshoe: Path) -> dict[str, Any]:
+def run(walks: int, seed: int, pyshoe: Path, circles: bool = False) -> dict[str, Any]:
     setup = real_fixed_setup()
+    paths = sorted(pyshoe.glob("*.mat"))
+    turn = pooled_turn_range([load_walk(p) for p in paths]) if circles else None
     result: dict[str, Any] = {
         "speed_mps": list(SPEED_MPS),
         "duration_s": list(DURATION_S),
         "seed": seed,
         "thresholds": list(THRESHOLDS),
+        "turn_per_stride_rad": None if turn is None else list(turn),
     }
-    trials = [load_recording(p) for p in sorted(pyshoe.glob("*.mat"))]
+    trials = [load_recording(p) for p in paths]
     result["PyShoe trials"] = summary(threshold_sweep(setup, trials, THRESHOLDS))
     for name, model in arms().items():
-        recordings = simulated_recordings(model, walks, seed, SPEED_MPS, DURATION_S)
+        recordings = simulated_recordings(model, walks, seed, SPEED_MPS, DURATION_S, turn)
         result[name] = summary(threshold_sweep(setup, recordings, THRESHOLDS))
     return result
 
@@ -163,9 +176,14 @@ def main() -> None:
     parser.add_argument("--pyshoe", type=Path, default=Path("../shared/data/pyshoe-vicon-dev"))
     parser.add_argument("--json", type=Path, help="also write the result here")
     parser.add_argument("--load", type=Path, help="a stored --json result: run nothing")
+    parser.add_argument(
+        "--circles", action="store_true", help="every leg on the PyShoe trials' circles"
+    )
     args = parser.parse_args()
     result = (
-        json.loads(args.load.read_text()) if args.load else run(args.walks, args.seed, args.pyshoe)
+        json.loads(args.load.read_text())
+        if args.load
+        else run(args.walks, args.seed, args.pyshoe, args.circles)
     )
     print_table(result)
     if args.json:

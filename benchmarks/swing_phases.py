@@ -30,7 +30,7 @@ import numpy as np
 
 from benchmarks.sim_error_budget import arms
 from pednav_env.calibration.compare import SimModel
-from pednav_env.calibration.path_turns import footfall_points, stride_turns
+from pednav_env.calibration.path_turns import pooled_turn_range
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import WalkSamples
 from pednav_env.calibration.swing_attitude import attitude_profile
@@ -71,8 +71,7 @@ def run(
         "stance": "truth speed" if truth_speed_stance else "labels / simulator truth",
     }
     trials = [stance_of(load_walk(p)) for p in sorted(pyshoe.glob("*.mat"))]
-    turns = np.abs(np.concatenate([stride_turns(footfall_points(w)) for w in trials]))
-    circle = tuple(float(v) for v in np.percentile(turns, [25.0, 75.0]))
+    circle = pooled_turn_range(trials)
     result["trials_turn_per_stride_rad"] = list(circle)
     result["PyShoe trials"] = {
         **swing_phase_profile(trials, bins),

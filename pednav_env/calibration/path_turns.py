@@ -16,6 +16,7 @@ the hallway walks turn a few hundredths to a few tenths of a radian.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -104,3 +105,15 @@ def route_turn_range(samples: WalkSamples) -> tuple[float, float] | None:
     if turn is None:
         return None
     return min(turn[0], MAX_ROUTE_TURN_RAD), min(turn[1], MAX_ROUTE_TURN_RAD)
+
+
+def pooled_turn_range(walks: Sequence[WalkSamples]) -> tuple[float, float]:
+    """The 25th and 75th percentile of |turn per stride| (rad) over the strides of all
+    ``walks`` together (the PyShoe trials: 0.79–1.43 rad); ValueError with fewer than
+    :data:`MIN_TURNS` strides in all."""
+    turns = [stride_turns(footfall_points(w)) for w in walks]
+    pooled = np.abs(np.concatenate(turns)) if turns else np.zeros(0)
+    if pooled.size < MIN_TURNS:
+        raise ValueError(f"pooled_turn_range: {pooled.size} stride turns, need {MIN_TURNS}")
+    lo, hi = np.percentile(pooled, [25.0, 75.0])
+    return float(lo), float(hi)

@@ -99,6 +99,8 @@ _WALK_BOUNDS = (
     np.array((0.93, *np.array(WALK_DRAWS)[6:, 0])),
     np.array((1.07, *np.array(WALK_DRAWS)[6:, 1])),
 )
+#: The longest stride of the leg model at the default leg length (m; StrideShape).
+_MAX_STRIDE_M = 4.0 * StrideShape.leg_length_m * math.sin(math.radians(60.0))
 #: Middle of the walking stance share's range (0.30–0.38).
 _MID_STANCE_SHARE = 0.34
 #: Mean of the walking mid-swing pitch draw (rad; WALK_DRAWS' (−0.1, 0.2)).
@@ -136,6 +138,9 @@ def speed_stride_shape(
         cycle, stance_frac, height, toe_off, heel_strike, pitch, roll = rng.uniform(
             *_RUN_BOUNDS
         ).tolist()
+        # Above about 3.9 m/s a drawn cycle would stretch the stride beyond the leg
+        # model (StrideShape: 4 l sin 60°, 3.118 m); the runner then takes quicker strides.
+        cycle = min(cycle, _MAX_STRIDE_M / speed)
         t0, t1 = stance_frac * cycle, 0.10 * cycle
         t2, t3 = cycle - t0 - 2 * t1, t1
         heel_strike = -heel_strike

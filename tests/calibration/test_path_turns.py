@@ -11,7 +11,12 @@ import pytest
 from testdata import PYSHOE_SAMPLE
 
 from pednav_env.calibration.compare import MODELS, band_turns, compare
-from pednav_env.calibration.path_turns import footfall_points, stride_turns, turn_range
+from pednav_env.calibration.path_turns import (
+    footfall_points,
+    pooled_turn_range,
+    stride_turns,
+    turn_range,
+)
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import WalkSamples, walk_stats
 from pednav_env.gait.speed_route import SpeedRouteConfig
@@ -106,3 +111,24 @@ def test_compare_walks_the_circles_of_recordings_that_carry_their_turn():
     np.testing.assert_array_equal(
         plain.bands[other].sim[0].log_shoe, turned.bands[other].sim[0].log_shoe
     )
+
+
+def test_pooled_turn_range_over_walks():
+    def walk_with(prints):
+        prints = np.asarray(prints, dtype=float)
+        n = len(prints)
+        return WalkSamples(
+            np.zeros((100, 3)),
+            np.tile([0.0, 0.0, 9.81], (100, 1)),
+            100.0,
+            footfall_index=np.arange(n) * 10,
+            footprints_m=prints,
+        )
+
+    square = walk_with([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]])  # three turns of π/2
+    line = walk_with([[0, 0], [1, 0], [2, 0], [3, 0]])  # two of 0
+    lo, hi = pooled_turn_range([square, line])
+    # |turns| 0, 0, π/2, π/2, π/2: the 25th percentile 0, the 75th π/2
+    assert lo == pytest.approx(0.0) and hi == pytest.approx(math.pi / 2)
+    with pytest.raises(ValueError, match="need 3"):
+        pooled_turn_range([line])

@@ -1,9 +1,11 @@
 """Routes in a speed band (gait.speed_route): every stride's speed in the band, the gait
 following the speed."""
 
+from dataclasses import fields
+
 import numpy as np
 
-from pednav_env.gait.foot_route import Gait
+from pednav_env.gait.foot_route import Gait, StrideShape
 from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
 
 
@@ -17,3 +19,12 @@ def test_speed_route_strides_stay_in_the_band_and_gait_follows_speed() -> None:
             assert gaits == {Gait.RUN}
         if band[1] <= 0.8:
             assert Gait.RUN not in gaits and Gait.FAST_WALK not in gaits
+
+
+def test_the_fastest_runs_stay_within_the_leg_model() -> None:
+    # at 3.9–4 m/s a drawn running cycle (0.65–0.8 s) would make strides up to 3.2 m;
+    # every stride must pass StrideShape's own checks (the leg model's 3.118 m at most)
+    route = speed_route(np.random.default_rng(0), SpeedRouteConfig(speed_mps=(3.9, 4.0)))
+    for stride in route.strides:
+        StrideShape(**{f.name: getattr(stride.shape, f.name) for f in fields(StrideShape)})
+        assert 3.9 - 1e-9 <= stride.shape.speed <= 4.0 + 1e-9
