@@ -162,7 +162,9 @@ def _cmd_sim2real(args: argparse.Namespace) -> int:
         from agents.error_level import error_level
 
         kept = [recording_of[id(w)] for w in walks]
-        level = error_level(kept, model, args.nav_walks, args.seed, nav_setup, args.nav_setup)
+        level = error_level(
+            kept, model, args.nav_walks, args.seed, nav_setup, args.nav_setup, args.nav_twins
+        )
         if args.plot is not None:
             from agents.error_level import write_figure
 
@@ -204,14 +206,21 @@ def _add_sim2real(sub: argparse._SubParsersAction) -> None:
         "--nav",
         action="store_true",
         help="also the error level: real-fixed's ARMSE on each recording with dense truth "
-        "(footprint error with footprints) beside simulated twins of its speed, length and "
-        "turn per stride (docs/SIM_TO_REAL.md)",
+        "(footprint error with footprints) beside simulated twins that walk its strides "
+        "(docs/SIM_TO_REAL.md)",
     )
     s2r.add_argument(
         "--nav-walks",
         type=positive_int,
         default=20,
         help="simulated twins per recording for --nav, ≥ 2 (default 20)",
+    )
+    s2r.add_argument(
+        "--nav-twins",
+        choices=("footfalls", "circles", "straight"),
+        default="footfalls",
+        help="how the --nav twins walk: each recording's own strides (default), circles of "
+        "its turn per stride at its speed, or straight legs at its speed",
     )
     s2r.add_argument(
         "--nav-setup",

@@ -8,18 +8,23 @@ generic CSV with positions) or footprints (the hallway walks):
 - the recording's error: ``real-fixed``'s (or another setup's) PyShoe ARMSE with
   ``pednav run``'s runner (:func:`agents.choose_shoe.lane_errors`), or with footprints
   only its mean footprint error;
-- its simulated twins: ``walks`` walks of the simulator model with every stride's speed
-  within ±:data:`SPEED_SPREAD` of the recording's walking speed
-  (:func:`pednav_env.calibration.stats.walk_stats`), the recording's length, and the
-  recording's turning: every leg of a twin walks a circle whose turn per stride is
-  drawn between the 25th and 75th percentile of the recording's |turn per stride|
-  (:func:`pednav_env.calibration.path_turns.turn_range`, from its truth track or
-  footprints; at most π/2), stops as the calibrated scenario draws them (``match_turns``
-  False: the scenario's straight legs and turns instead); recording r's walk i draws from
-  ``numpy.random.default_rng([100000·seed + r, i])``; the same filter and measure
-  against the simulated truth (for a footprint walk, footprints at the last sample of
-  each simulated stance, the truth dropped, so that the twins are scored by the
-  footprint error too);
+- its simulated twins: ``walks`` walks of the simulator model. By default
+  (``twins="footfalls"``) each twin walks the recording's own strides in order
+  (:func:`pednav_env.calibration.path_turns.stride_sequence`: per stride the speed
+  between its footfalls, its heading change and the stand before it, from the
+  footprints or the truth at each stance; :func:`pednav_env.gait.speed_route.
+  footfall_route`), its walker, stride shapes and IMU errors drawn; a recording with
+  fewer than :data:`MIN_TWIN_STRIDES` strides gets the next form. ``"circles"``: every
+  stride's speed within ±:data:`SPEED_SPREAD` of the recording's walking speed
+  (:func:`pednav_env.calibration.stats.walk_stats`), the recording's length, every leg
+  on a circle whose turn per stride is drawn between the 25th and 75th percentile of
+  the recording's |turn per stride| (at most π/2;
+  :func:`pednav_env.calibration.path_turns.route_turn_range`), stops as the calibrated
+  scenario draws them. ``"straight"``: the same with the scenario's straight legs and
+  turns. Recording r's walk i draws from ``numpy.random.default_rng([100000·seed + r,
+  i])``; the same filter and measure against the simulated truth (for a footprint walk,
+  footprints at the last sample of each simulated stance, the truth dropped, so that
+  the twins are scored by the footprint error too);
 - *covered*: the recording's ARMSE inside the twins' 5–95 % range (order statistics; a
   diverged walk counts as an infinite error); its percentile among them; and the ratio
   of the twins' median to the recording's ARMSE.
@@ -43,11 +48,13 @@ from numpy.typing import NDArray
 
 from agents.choose_shoe import lane_errors
 from pednav_env.calibration.compare import ENVELOPE_PERCENT, SimModel, coverage_interval
-from pednav_env.calibration.path_turns import route_turn_range
+from pednav_env.calibration.path_turns import StrideSequence, route_turn_range, stride_sequence
 from pednav_env.calibration.sources import recording_from_simulation, samples_from_recording
 from pednav_env.calibration.stats import WalkSamples, walk_stats
+from pednav_env.gait.foot import FootTrajectory
 from pednav_env.io import Footprints, Recording
 from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
+from pednav_env.sensors.imu import ImuMeasurements
 
 Array = NDArray[np.float64]
 
@@ -59,6 +66,12 @@ SPEED_LIMITS_MPS = (0.1, 3.8)
 MIN_DURATION_S = 10.0
 #: Simulated twins per recording unless told otherwise.
 DEFAULT_WALKS = 20
+#: How twins walk (module docstring): the recording's own strides (the default; circles
+#: when the recording has fewer than :data:`MIN_TWIN_STRIDES` strides), circles of its
+#: turn per stride at its speed, or the scenario's straight legs at its speed.
+TWIN_FORMS = ("footfalls", "circles", "straight")
+#: Fewest recorded strides the twins walk as they are.
+MIN_TWIN_STRIDES = 3
 
 
 @dataclass(frozen=True)
@@ -73,6 +86,9 @@ class RecordingLevel:
     measure: str = "PyShoe ARMSE"
     #: The twins' turn per stride range (rad), None for the scenario's straight legs.
     turn_rad: tuple[float, float] | None = None
+    #: How the twins walk (:data:`TWIN_FORMS`): the recording's own strides, circles of
+    #: its turn per stride, or the scenario's straight legs.
+    form: str = "straight"
 
     @property
     def envelope_m(self) -> tuple[float, float]:
@@ -114,6 +130,7 @@ class RecordingLevel:
             "duration_s": self.duration_s,
             "error_m": num(self.error_m),
             "twins": int(self.twins_m.size),
+            "twins_walk": self.form,
             "twin_turn_per_stride_rad": None if self.turn_rad is None else list(self.turn_rad),
             "twins_diverged": int(np.sum(~np.isfinite(self.twins_m))),
             "twin_median_m": num(self.median_m),
@@ -132,6 +149,19 @@ class ErrorLevelReport:
     rows: list[RecordingLevel]
     not_checked: list[str]
     setup: str = "real-fixed"
+
+    @property
+    def twins_text(self) -> str:
+        """How the twins walked, in words."""
+        forms = {r.form for r in self.rows}
+        parts = []
+        if "footfalls" in forms:
+            parts.append("walking each recording's own strides")
+        if "circles" in forms:
+            parts.append(f"same speed ±{SPEED_SPREAD:.0%}, length and turn per stride")
+        if "straight" in forms or not forms:
+            parts.append(f"same speed ±{SPEED_SPREAD:.0%} and length, straight legs")
+        return "; ".join(parts)
 
     @property
     def coverage(self) -> tuple[int, int]:
@@ -169,8 +199,7 @@ class ErrorLevelReport:
         lines = [
             f"error level: {self.setup}'s PyShoe ARMSE (footprint error for footprint walks), "
             f"each recording against {self.walks} "
-            f"simulated twins ({self.model}; same speed ±{SPEED_SPREAD:.0%}, same length"
-            f"{', same turn per stride' if any(r.turn_rad for r in self.rows) else ''})",
+            f"simulated twins ({self.model}; {self.twins_text})",
             f"{'recording':28s} {'m/s':>5s} {'s':>5s} {'error m':>8s} "
             f"{'twins: median [5–95 %] m':>28s} {'pct':>5s}  covered",
         ]
@@ -230,6 +259,27 @@ def twin_recordings(
     with their truth track, or with ``footprints`` footprints only (module docstring);
     with ``turn_per_stride_rad`` every leg on a circle."""
     truth, imu = model.batch(speed_mps, walks, seed, (duration_s, duration_s), turn_per_stride_rad)
+    return _as_recordings(model, truth, imu, walks, seed, footprints)
+
+
+def footfall_twin_recordings(
+    model: SimModel, walks: int, seed: int, strides: StrideSequence, footprints: bool
+) -> list[Recording]:
+    """``walks`` simulated twins that walk the recording's own strides
+    (:meth:`SimModel.footfall_batch`, walk i from ``default_rng([seed, i])``), as
+    :func:`twin_recordings` returns them."""
+    truth, imu = model.footfall_batch(*strides, walks, seed)
+    return _as_recordings(model, truth, imu, walks, seed, footprints)
+
+
+def _as_recordings(
+    model: SimModel,
+    truth: FootTrajectory,
+    imu: ImuMeasurements,
+    walks: int,
+    seed: int,
+    footprints: bool,
+) -> list[Recording]:
     out = []
     for i in range(walks):
         rec = recording_from_simulation(truth, imu, i, f"{model.name}-{seed}-{i}")
@@ -249,13 +299,15 @@ def error_level(
     seed: int = 0,
     setup: RealFilterSetup | None = None,
     setup_name: str = "real-fixed",
-    match_turns: bool = True,
+    twins: str = "footfalls",
 ) -> ErrorLevelReport:
     """The report of the module docstring for ``recordings`` and ``model``; ``setup``
-    (named ``setup_name``) instead of ``real-fixed``'s if given; ``match_turns`` False:
-    twins on the scenario's straight legs."""
+    (named ``setup_name``) instead of ``real-fixed``'s if given; ``twins`` one of
+    :data:`TWIN_FORMS` (module docstring)."""
     if walks < 2:
         raise ValueError(f"walks must be ≥ 2 (a spread of twins), got {walks}")
+    if twins not in TWIN_FORMS:
+        raise ValueError(f"twins must be one of {', '.join(TWIN_FORMS)}, got {twins!r}")
     setup = setup or real_fixed_setup()
     rows, not_checked = [], []
     for r, rec in enumerate(recordings):
@@ -269,20 +321,30 @@ def error_level(
             not_checked.append(rec.name)
             continue
         duration = max(rec.duration_s, MIN_DURATION_S)
-        turn = twin_turn(samples) if match_turns else None
-        twins = twin_recordings(
-            model,
-            walks,
-            100_000 * seed + r,
-            twin_speed(speed),
-            duration,
-            footprints=not dense,
-            turn_per_stride_rad=turn,
-        )
-        errors = np.array([lane_errors(t, setup, {})[0] for t in twins])
+        strides = stride_sequence(samples) if twins == "footfalls" else None
+        turn = twin_turn(samples) if twins != "straight" else None
+        if strides is not None and strides.speed_mps.size >= MIN_TWIN_STRIDES:
+            form = "footfalls"
+            made = footfall_twin_recordings(
+                model, walks, 100_000 * seed + r, strides, footprints=not dense
+            )
+        else:
+            form = "straight" if turn is None else "circles"
+            made = twin_recordings(
+                model,
+                walks,
+                100_000 * seed + r,
+                twin_speed(speed),
+                duration,
+                footprints=not dense,
+                turn_per_stride_rad=turn,
+            )
+        errors = np.array([lane_errors(t, setup, {})[0] for t in made])
         own = float(lane_errors(rec, setup, {})[0])
         measure = "PyShoe ARMSE" if dense else "footprint error"
-        rows.append(RecordingLevel(rec.name, speed, rec.duration_s, own, errors, measure, turn))
+        rows.append(
+            RecordingLevel(rec.name, speed, rec.duration_s, own, errors, measure, turn, form)
+        )
     return ErrorLevelReport(model.name, walks, seed, rows, not_checked, setup_name)
 
 

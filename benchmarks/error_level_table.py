@@ -3,15 +3,21 @@ simulator models at several SHOE thresholds, on the 23 PyShoe development trials
 ARMSE) and the 8 hallway walks (``*_LLIO.mat``; mean footprint error)
 (docs/SIM_TO_REAL.md, "Matched twins").
 
-Each recording against 20 simulated twins of its walking speed (±10 %), length and turn
-per stride (``--straight-twins``: the scenario's straight legs, as the table was first
-measured), per model; the filter is ``real-fixed``'s with its threshold γ replaced by each value of
-``--gammas`` (``real-fixed``'s own 2.25·10⁷ first). Per (model, γ): the trials covered
-by their twins' 5–95 % range, the geometric mean of twins' median over the trial's
-ARMSE, and the mean percentile (50 ± 6.0 for 23 trials if the twins were the trials'
-own distribution). Nothing is chosen on these runs.
+Each recording against 20 simulated twins per model (``--twins``: by default each twin
+walks the recording's own strides, footfall to footfall; ``circles``: its walking speed
+(±10 %), length and turn per stride; ``straight``: its speed and length on the
+scenario's straight legs, as the table was first measured); the filter is
+``real-fixed``'s with its threshold γ replaced by each value of :data:`GAMMAS`
+(``real-fixed``'s own 2.25·10⁷ first). Per (model, γ): the recordings covered by their
+twins' 5–95 % range, the geometric mean of twins' median over the recording's error,
+and the mean percentile (50 ± 6.0 for 23 trials if the twins were the trials' own
+distribution). Nothing is chosen on these runs.
 
     PYTHONPATH=. .venv/bin/python benchmarks/error_level_table.py \\
+        --json benchmarks/results/error_level_table_footfalls.json
+    PYTHONPATH=. .venv/bin/python benchmarks/error_level_table.py --twins circles \\
+        --json benchmarks/results/error_level_table_turns.json
+    PYTHONPATH=. .venv/bin/python benchmarks/error_level_table.py --twins straight \\
         --json benchmarks/results/error_level_table.json
 """
 
@@ -23,7 +29,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from agents.error_level import DEFAULT_WALKS, error_level
+from agents.error_level import DEFAULT_WALKS, TWIN_FORMS, error_level
 from pednav_env.calibration.compare import MODELS, model_from_json
 from pednav_env.io import load_recording
 from pednav_env.replay.setup import real_fixed_setup
@@ -52,7 +58,7 @@ def run(
     walks: int,
     seed: int,
     models: tuple[str, ...] = MODEL_NAMES,
-    match_turns: bool = True,
+    twins: str = "footfalls",
 ) -> dict[str, Any]:
     sets = {
         "PyShoe trials": [load_recording(p) for p in sorted(pyshoe.glob("*.mat"))],
@@ -63,7 +69,7 @@ def run(
         "walks": walks,
         "seed": seed,
         "gammas": list(gammas),
-        "twins": "same turn per stride" if match_turns else "straight legs",
+        "twins": twins,
         "rows": [],
     }
     for name in models:
@@ -73,7 +79,7 @@ def run(
             setup = replace(base, filter=replace(base.filter, detector=detector))
             for set_name, recordings in sets.items():
                 report = error_level(
-                    recordings, model, walks, seed, setup, f"γ = {gamma:.3g}", match_turns
+                    recordings, model, walks, seed, setup, f"γ = {gamma:.3g}", twins
                 )
                 summary = report.to_json()
                 summary.pop("rows")
@@ -106,9 +112,11 @@ def main() -> None:
         "--models", nargs="+", default=list(MODEL_NAMES), help="model names or JSON files"
     )
     parser.add_argument(
-        "--straight-twins",
-        action="store_true",
-        help="twins on the scenario's straight legs instead of the recording's turn per stride",
+        "--twins",
+        choices=TWIN_FORMS,
+        default="footfalls",
+        help="how twins walk: each recording's own strides (default), circles of its turn "
+        "per stride, or the scenario's straight legs (as first measured)",
     )
     args = parser.parse_args()
     if args.load:
@@ -121,7 +129,7 @@ def main() -> None:
             args.walks,
             args.seed,
             tuple(args.models),
-            not args.straight_twins,
+            args.twins,
         )
     print_table(result)
     if args.json:

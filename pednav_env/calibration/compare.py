@@ -32,7 +32,8 @@ from scipy.stats import binomtest, wasserstein_distance
 from pednav_env.calibration.sources import samples_from_simulation
 from pednav_env.calibration.stats import WalkStats, walk_stats
 from pednav_env.gait.foot import FootSimConfig, FootTrajectory, simulate_foot
-from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
+from pednav_env.gait.foot_route import Route
+from pednav_env.gait.speed_route import SpeedRouteConfig, footfall_route, speed_route
 from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.gait.walker_checks import WALKER_FLAGS
 from pednav_env.sensors.imu import IMU_GRADES, ImuMeasurements, simulate_imu
@@ -114,10 +115,34 @@ class SimModel:
                 turn_per_stride_rad=turn,
             )
             routes.append(speed_route(rng, cfg))
-        truth = simulate_foot(routes, FootSimConfig(rate_hz=SIM_RATE_HZ), full_state=False)
+        return self._walk(routes, rngs)
+
+    def footfall_batch(
+        self,
+        speed_mps: Sequence[float],
+        turn_rad: Sequence[float],
+        stop_s: Sequence[float],
+        walks: int,
+        seed: int,
+    ) -> tuple[FootTrajectory, ImuMeasurements]:
+        """``walks`` simulated walks of one stride sequence
+        (:func:`pednav_env.gait.speed_route.footfall_route`: stride i at ``speed_mps[i]``,
+        turning by ``turn_rad[i]`` after a stand of ``stop_s[i]`` s); walk i draws its
+        walker, stride shapes and IMU errors from ``default_rng([seed, i])``."""
+        rngs = [np.random.default_rng([seed, i]) for i in range(walks)]
+        routes = []
+        for rng in rngs:
+            motion = None if self.stance is None else self.stance.draw(rng)
+            routes.append(footfall_route(rng, speed_mps, turn_rad, stop_s, motion))
+        return self._walk(routes, rngs)
+
+    def _walk(
+        self, routes: Sequence[Route], rngs: Sequence[np.random.Generator]
+    ) -> tuple[FootTrajectory, ImuMeasurements]:
+        truth = simulate_foot(list(routes), FootSimConfig(rate_hz=SIM_RATE_HZ), full_state=False)
         spec = IMU_GRADES[self.imu_grade]()
         imu = simulate_imu(
-            truth.omega_b, truth.f_b, SIM_RATE_HZ, spec, rngs, gait_step_index=truth.gait_step
+            truth.omega_b, truth.f_b, SIM_RATE_HZ, spec, list(rngs), gait_step_index=truth.gait_step
         )
         return truth, imu
 

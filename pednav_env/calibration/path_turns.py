@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from itertools import pairwise
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,6 +40,8 @@ Array = NDArray[np.float64]
 MIN_STRIDE_M = 0.2
 #: Fewest stride turns a walk needs for :func:`turn_range`.
 MIN_TURNS = 3
+#: Longest footfall-to-footfall time (s) walked as one stride; the rest is a stand.
+MAX_STRIDE_S = 1.5
 #: Largest turn per stride a simulated route walks (rad;
 #: :class:`pednav_env.gait.speed_route.SpeedRouteConfig`).
 MAX_ROUTE_TURN_RAD = math.pi / 2
@@ -117,3 +121,81 @@ def pooled_turn_range(walks: Sequence[WalkSamples]) -> tuple[float, float]:
         raise ValueError(f"pooled_turn_range: {pooled.size} stride turns, need {MIN_TURNS}")
     lo, hi = np.percentile(pooled, [25.0, 75.0])
     return float(lo), float(hi)
+
+
+class StrideSequence(NamedTuple):
+    """A walk's strides in order (:func:`stride_sequence`), each ``(S,)``: speed (m/s,
+    footfall-to-footfall distance over the time between them), heading change (rad)
+    and the stand before the stride (s)."""
+
+    speed_mps: Array
+    turn_rad: Array
+    stop_s: Array
+
+
+def _footfall_times(samples: WalkSamples) -> tuple[Array, Array, Array]:
+    """Per footfall the time (s) the foot arrives, the time it leaves (NaN when not
+    known) and ``(K, 2)`` points: footprints at their sample index (leaving unknown), or
+    the start, end and mean truth position of each cleaned stance run."""
+    s = samples
+    rate = float(s.rate_hz)
+    if s.footprints_m is not None and s.footfall_index is not None:
+        arrive = np.asarray(s.footfall_index, dtype=float) / rate
+        return arrive, np.full(arrive.shape, np.nan), np.asarray(s.footprints_m, dtype=float)[:, :2]
+    empty = np.zeros(0), np.zeros(0), np.zeros((0, 2))
+    if s.truth_pos is None:
+        return empty
+    source, stance, _, _ = walking_part(s, log10_shoe(s.omega_b, s.f_b, rate, s.g))
+    if source == StanceSource.DETECTOR:
+        return empty
+    stance = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
+    arrive, leave, points = [], [], []
+    for a, b in zip(*runs(stance), strict=True):
+        xy = np.asarray(s.truth_pos[a:b, :2], dtype=float)
+        ok = np.all(np.isfinite(xy), axis=1)
+        if ok.any():
+            arrive.append(a / rate)
+            leave.append(b / rate)
+            points.append(xy[ok].mean(axis=0))
+    return np.array(arrive), np.array(leave), np.array(points).reshape(-1, 2)
+
+
+def stride_sequence(
+    samples: WalkSamples, min_stride_m: float = MIN_STRIDE_M, max_stride_s: float = MAX_STRIDE_S
+) -> StrideSequence:
+    """The walk's strides in order, from its footfalls (module docstring). Footfalls
+    closer than ``min_stride_m`` are one, at the first one's point, from the first
+    arrival to the last departure. A stride runs from one footfall to the next and turns
+    by the change of heading from the stride before (the first does not turn). With
+    stance runs (a truth track), its time is the move from departure to the next arrival
+    plus the footfall's stance up to the walk's median stance; the rest of that stance is
+    a stand before the stride. With footprints only (no departures), its time is the
+    time between the footprints up to ``max_stride_s``, the rest a stand. Its speed is
+    its length over its time. Empty without two footfalls."""
+    arrive, leave, pts = _footfall_times(samples)
+    groups: list[list] = []  # point, first arrival, last arrival, last departure
+    for t_in, t_out, p in zip(arrive, leave, pts, strict=True):
+        if groups and np.hypot(*(p - groups[-1][0])) < min_stride_m:
+            groups[-1][2], groups[-1][3] = float(t_in), float(t_out)
+        else:
+            groups.append([p, float(t_in), float(t_in), float(t_out)])
+    if len(groups) < 2:
+        return StrideSequence(np.zeros(0), np.zeros(0), np.zeros(0))
+    step = np.diff(np.array([g[0] for g in groups]), axis=0)
+    length = np.hypot(step[:, 0], step[:, 1])
+    first_in = np.array([g[1] for g in groups])
+    last_out = np.array([g[3] for g in groups])
+    if np.all(np.isfinite(last_out)):
+        stance = last_out[:-1] - first_in[:-1]
+        typical = float(np.median(last_out - first_in))
+        moving = np.maximum(first_in[1:] - last_out[:-1], 1e-3)
+        kept = np.minimum(stance, typical)
+        walked, stood = moving + kept, stance - kept
+    else:
+        gap = np.array([b[1] - a[2] for a, b in pairwise(groups)])
+        before = np.array([g[2] - g[1] for g in groups[:-1]])
+        walked = np.clip(gap, 1e-3, max_stride_s)
+        stood = before + (gap - walked)
+    heading = np.arctan2(step[:, 1], step[:, 0])
+    turn = np.concatenate(([0.0], wrap_angle(np.diff(heading))))
+    return StrideSequence(length / walked, turn, stood)

@@ -11,6 +11,7 @@ stance timing (:class:`pednav_env.gait.stance_motion.StanceMotion`).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -232,3 +233,45 @@ def speed_route(rng: np.random.Generator, config: SpeedRouteConfig | None = None
                 )
             strides.append(s)
             elapsed += shape.cycle_s + s.stop_s
+
+
+#: Stride speeds :func:`footfall_route` walks (m/s): the walk generator's limits.
+FOOTFALL_SPEED_MPS = (0.1, 3.8)
+
+
+def footfall_route(
+    rng: np.random.Generator,
+    speed_mps: Sequence[float],
+    turn_rad: Sequence[float],
+    stop_s: Sequence[float],
+    walker: StanceMotion | None = None,
+    run_from_mps: float = 2.0,
+) -> Route:
+    """A route that walks a given stride sequence: stride i at ``speed_mps[i]`` (clipped
+    to :data:`FOOTFALL_SPEED_MPS`; the gait following from the speed, the shape drawn as
+    :func:`speed_stride_shape` draws it, with ``walker``), turning by ``turn_rad[i]``
+    (|turn| ≤ π) after a stand of ``stop_s[i]`` s (≥ 0). Starts with a stand of 2 s
+    (the alignment window) or ``stop_s[0]`` if longer (the first stride then starts
+    without another), ends with a 1 s stand. A simulated twin of a recorded walk
+    (docs/SIM_TO_REAL.md, "Matched twins")."""
+    n = len(speed_mps)
+    if not (n == len(turn_rad) == len(stop_s)) or n < 1:
+        raise ValueError(
+            "footfall_route: speed_mps, turn_rad and stop_s must have one entry per stride "
+            f"(≥ 1), got {len(speed_mps)}, {len(turn_rad)}, {len(stop_s)}"
+        )
+    if not all(math.isfinite(t) and t >= 0 for t in stop_s):
+        raise ValueError(f"footfall_route: every stop_s must be a finite ≥ 0 s, got {list(stop_s)}")
+    strides = []
+    initial = max(2.0, float(stop_s[0]))
+    stops = [0.0, *stop_s[1:]]
+    for v, turn, stop in zip(speed_mps, turn_rad, stops, strict=True):
+        if not (math.isfinite(v) and v > 0):
+            raise ValueError(f"footfall_route: every speed must be > 0, got {v!r}")
+        v = min(max(float(v), FOOTFALL_SPEED_MPS[0]), FOOTFALL_SPEED_MPS[1])
+        shape = speed_stride_shape(rng, v, gait_for_speed(v, run_from_mps), walker)
+        strides.append(Stride(shape, heading_change=float(turn), stop_s=float(stop)))
+    phases = tuple(rng.uniform(0, 2 * math.pi, 3))
+    return Route(
+        tuple(strides), initial, 1.0, realistic=True, seed_phases=phases, stance_motion=walker
+    )

@@ -127,17 +127,26 @@ def test_twins_walk_the_recordings_turns():
     rec = load_recording(PYSHOE_SAMPLE)
     turn = twin_turn(samples_from_recording(rec))
     assert turn is not None and turn[0] > 0.3  # the trials' circles, ~1 rad per stride
-    report = error_level([rec], MODELS["calibrated"], walks=2, seed=3)
+    report = error_level([rec], MODELS["calibrated"], walks=2, seed=3, twins="circles")
     assert report.rows[0].turn_rad == turn
     assert report.rows[0].to_json()["twin_turn_per_stride_rad"] == list(turn)
-    assert "same turn per stride" in report.format_text()
+    assert report.rows[0].form == "circles"
+    assert "length and turn per stride" in report.format_text()
     twins = twin_recordings(MODELS["calibrated"], 2, 7, (0.9, 1.1), 30.0, False, turn)
     for t in twins:
         lo, hi = turn_range(samples_from_recording(t))
         assert turn[0] - 0.1 < lo <= hi < turn[1] + 0.1
-    straight = error_level([rec], MODELS["calibrated"], 2, 3, match_turns=False)
+    straight = error_level([rec], MODELS["calibrated"], 2, 3, twins="straight")
     assert straight.rows[0].turn_rad is None
-    assert "same turn per stride" not in straight.format_text()
+    assert "turn per stride" not in straight.format_text()
+    assert "straight legs" in straight.format_text()
+    # by default the twins walk the recording's own strides
+    walked = error_level([rec], MODELS["calibrated"], 2, 3)
+    assert walked.rows[0].form == "footfalls"
+    assert walked.rows[0].to_json()["twins_walk"] == "footfalls"
+    assert "walking each recording's own strides" in walked.format_text()
+    with pytest.raises(ValueError, match="twins must be one of"):
+        error_level([rec], MODELS["calibrated"], 2, 3, twins="loops")
     assert straight.rows[0].twins_m.tolist() != report.rows[0].twins_m.tolist()
 
 
@@ -148,6 +157,11 @@ def test_cli_nav(tmp_path, capsys: pytest.CaptureFixture[str]):
     assert level["recordings"] == 1 and level["walks"] == 2
     assert main(args) == 0
     assert "error level: real-fixed's PyShoe ARMSE" in capsys.readouterr().out
+    assert main([*args, "--nav-twins", "straight"]) == 0
+    assert "straight legs" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as refused:  # argparse refuses an unknown form
+        main([*args, "--nav-twins", "loops"])
+    assert refused.value.code == 2 and "--nav-twins" in capsys.readouterr().err
     assert main([*args, "--plot", str(tmp_path)]) == 0
     assert f"wrote {tmp_path / 'error_level_calibrated.png'}" in capsys.readouterr().err
     assert main(["sim2real", str(PYSHOE_SAMPLE), "--nav", "--nav-walks", "1"]) == 2
