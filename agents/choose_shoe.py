@@ -25,7 +25,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from pednav_env.calibration.compare import MODELS, SimModel
+from pednav_env.calibration.compare import MODELS
+from pednav_env.calibration.sim_model import SimModel
 from pednav_env.calibration.sources import recording_from_simulation
 from pednav_env.io import Recording
 from pednav_env.nav.detectors import ShoeDetectorConfig

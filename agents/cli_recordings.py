@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 from agents.cli_types import nonnegative_int, output_dir, positive_float, positive_int
 
 if TYPE_CHECKING:
-    from pednav_env.calibration.compare import SimModel
+    from pednav_env.calibration.sim_model import SimModel
     from pednav_env.replay.simulate import SimulatorModel
 
 

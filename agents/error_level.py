@@ -47,8 +47,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from agents.choose_shoe import lane_errors
-from pednav_env.calibration.compare import ENVELOPE_PERCENT, SimModel, coverage_interval
+from pednav_env.calibration.compare import ENVELOPE_PERCENT, coverage_interval
 from pednav_env.calibration.path_turns import StrideSequence, route_turn_range, stride_sequence
+from pednav_env.calibration.sim_model import SimModel
 from pednav_env.calibration.sources import recording_from_simulation, samples_from_recording
 from pednav_env.calibration.stats import WalkSamples, walk_stats
 from pednav_env.gait.foot import FootTrajectory

@@ -102,13 +102,7 @@ from pednav_env.calibration.cadence import (
     fit_cadence_law,
     recorded_strides,
 )
-from pednav_env.calibration.compare import (
-    DEFAULT_WALKS_PER_BAND,
-    SPEED_BANDS,
-    SimModel,
-    band_label,
-    compare,
-)
+from pednav_env.calibration.compare import DEFAULT_WALKS_PER_BAND, SPEED_BANDS, band_label, compare
 from pednav_env.calibration.fit import fit, groups
 from pednav_env.calibration.objective import GRADE, band_distance, by_band, swing_distance
 from pednav_env.calibration.parameters import (
@@ -120,6 +114,7 @@ from pednav_env.calibration.parameters import (
     randomization,
 )
 from pednav_env.calibration.path_turns import route_turn_range
+from pednav_env.calibration.sim_model import SimModel
 from pednav_env.calibration.sources import load_walk
 from pednav_env.calibration.stats import WalkStats, walk_stats
 

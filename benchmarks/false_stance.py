@@ -36,12 +36,12 @@ import numpy as np
 from pednav_env.calibration.compare import (
     DEFAULT_WALKS_PER_BAND,
     MODELS,
-    SIM_TOP_SPEED_MPS,
     SPEED_BANDS,
     band_label,
     band_of,
 )
 from pednav_env.calibration.false_stance import false_stance
+from pednav_env.calibration.sim_model import SIM_TOP_SPEED_MPS
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import walk_stats
 

@@ -55,8 +55,8 @@ import numpy as np
 from scipy.stats import bootstrap
 
 from agents.choose_shoe import simulated_recordings, threshold_sweep
-from pednav_env.calibration.compare import SimModel
 from pednav_env.calibration.path_turns import pooled_turn_range
+from pednav_env.calibration.sim_model import SimModel
 from pednav_env.calibration.sources import load_walk
 from pednav_env.gait.stance_motion import StanceRandomization
 from pednav_env.io import load_recording

@@ -51,15 +51,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pednav_env.calibration.compare import (
-    SIM_DURATION_S,
-    BandComparison,
-    Sim2RealReport,
-    SimModel,
-    band_of,
-    compare,
-)
+from pednav_env.calibration.compare import BandComparison, Sim2RealReport, band_of, compare
 from pednav_env.calibration.objective import GRADE
+from pednav_env.calibration.sim_model import SIM_DURATION_S, SimModel
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import (
     LABEL_MIN_RUN_S,

@@ -49,8 +49,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pednav_env.calibration.compare import SimModel
 from pednav_env.calibration.objective import GRADE
+from pednav_env.calibration.sim_model import SimModel
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import (
     DETECTOR_STAND_LOG10,

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pednav_env.calibration.compare import SimModel
+from pednav_env.calibration.sim_model import SimModel
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import WalkSamples, walk_stats
 from pednav_env.envs.foot_filters import shoe_knobs

@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from benchmarks.sim_error_budget import arms
-from pednav_env.calibration.compare import SimModel
 from pednav_env.calibration.path_turns import pooled_turn_range
+from pednav_env.calibration.sim_model import SimModel
 from pednav_env.calibration.sources import load_walk, samples_from_simulation
 from pednav_env.calibration.stats import WalkSamples
 from pednav_env.calibration.swing_attitude import attitude_profile

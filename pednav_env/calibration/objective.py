@@ -64,13 +64,13 @@ from scipy.stats import wasserstein_distance
 
 from pednav_env.calibration.compare import (
     SPEED_BANDS,
-    SimModel,
     band_of,
     band_turns,
     stride_quietness_by_bin,
     stride_swing_by_bin,
 )
 from pednav_env.calibration.parameters import randomization
+from pednav_env.calibration.sim_model import SimModel
 from pednav_env.calibration.stats import WalkStats
 
 Array = NDArray[np.float64]

@@ -10,7 +10,7 @@ import pytest
 from scipy.stats import wasserstein_distance
 
 from agents.choose_shoe import errors_by_recording, simulated_recordings
-from pednav_env.calibration.compare import MODELS, SPEED_BANDS, SimModel
+from pednav_env.calibration.compare import MODELS, SPEED_BANDS
 from pednav_env.calibration.fit import fit, groups, minimize_in_box
 from pednav_env.calibration.objective import (
     COVERAGE_SEED_OFFSET,
@@ -35,6 +35,7 @@ from pednav_env.calibration.parameters import (
     parameter_set,
     randomization,
 )
+from pednav_env.calibration.sim_model import SimModel
 from pednav_env.calibration.stats import SpeedSource, StanceSource, StrideStats, WalkStats
 from pednav_env.replay.setup import real_fixed_setup
 
