@@ -32,6 +32,7 @@ from pednav_env.calibration.stats import (
     runs,
     walking_part,
 )
+from pednav_env.calibration.strides import stride_stances, truth_glitches
 from pednav_env.rotations import wrap_angle
 
 Array = NDArray[np.float64]
@@ -136,7 +137,11 @@ class StrideSequence(NamedTuple):
 def _footfall_times(samples: WalkSamples) -> tuple[Array, Array, Array]:
     """Per footfall the time (s) the foot arrives, the time it leaves (NaN when not
     known) and ``(K, 2)`` points: footprints at their sample index (leaving unknown), or
-    the start, end and mean truth position of each cleaned stance run."""
+    the start, end and mean truth position of each stance, the cleaned stance runs
+    merged as the walk's strides merge them
+    (:func:`pednav_env.calibration.strides.stride_stances`: split stances, runs closer
+    than a minimum stride) and the truth positions of a truth glitch
+    (:func:`pednav_env.calibration.strides.truth_glitches`) left out."""
     s = samples
     rate = float(s.rate_hz)
     if s.footprints_m is not None and s.footfall_index is not None:
@@ -149,9 +154,12 @@ def _footfall_times(samples: WalkSamples) -> tuple[Array, Array, Array]:
     if source == StanceSource.DETECTOR:
         return empty
     stance = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
+    pos = np.array(s.truth_pos[:, :2], dtype=float)
+    for a, b in truth_glitches(s.truth_pos, rate):  # frozen, then a jump: no position
+        pos[a : b + 1] = np.nan
     arrive, leave, points = [], [], []
-    for a, b in zip(*runs(stance), strict=True):
-        xy = np.asarray(s.truth_pos[a:b, :2], dtype=float)
+    for a, b in zip(*stride_stances(*runs(stance), rate, pos), strict=True):
+        xy = pos[a:b]
         ok = np.all(np.isfinite(xy), axis=1)
         if ok.any():
             arrive.append(a / rate)

@@ -4,6 +4,7 @@ them (gait.speed_route.footfall_route) and twins that do (SimModel.footfall_batc
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -82,3 +83,41 @@ def test_twins_walk_the_strides_given_measured_on_their_truth():
         assert twin.stop_s[6] == pytest.approx(2.0, abs=0.1)
         assert twin.stop_s[0] == pytest.approx(2.0, abs=0.1)
     assert stride_sequence(load_walk(PYSHOE_SAMPLE)).speed_mps.size >= 3
+
+
+def labelled(split_gap_s: float = 0.0) -> WalkSamples:
+    """Four stances 1 m apart (0.5 s each, swings of 0.6 s along x), stance labels and
+    truth; the second stance split by ``split_gap_s`` of flickered labels (the foot still)."""
+    rate = RATE_HZ
+    labels, xs = [], []
+    for k in range(4):
+        n_st = int(0.5 * rate)
+        stance = [True] * n_st
+        if k == 1 and split_gap_s:
+            gap = int(split_gap_s * rate)
+            stance[20 : 20 + gap] = [False] * gap
+        labels += stance
+        xs += [float(k)] * n_st
+        if k < 3:
+            n_sw = int(0.6 * rate)
+            labels += [False] * n_sw
+            xs += list(k + (np.arange(n_sw) + 1) / (n_sw + 1))
+    n = len(labels)
+    pos = np.zeros((n, 3))
+    pos[:, 0] = xs
+    omega = np.where(np.array(labels)[:, None], 0.0, 3.0) * np.ones((n, 3))
+    return WalkSamples(
+        omega, np.tile([0.0, 0.0, 9.81], (n, 1)), rate, stance=np.array(labels), truth_pos=pos
+    )
+
+
+def test_split_stances_and_truth_glitches_make_no_false_strides():
+    whole = stride_sequence(labelled())
+    np.testing.assert_allclose(whole.speed_mps, 1.0 / 1.1, rtol=0.02)  # 1 m per 1.1 s cycle
+    split = stride_sequence(labelled(split_gap_s=0.06))  # the foot did not move: one stance
+    np.testing.assert_allclose(split.speed_mps, whole.speed_mps)
+    glitched = labelled()
+    pos = glitched.truth_pos.copy()
+    pos[110:130, 0] = 3.0  # the second stance (x = 1 m): a frozen, wrong track, then a jump
+    jumped = stride_sequence(replace(glitched, truth_pos=pos))
+    np.testing.assert_allclose(jumped.speed_mps, whole.speed_mps)
