@@ -28,13 +28,11 @@ from typing import Any
 import numpy as np
 
 from pednav_env.calibration.stats import (
-    LABEL_MIN_RUN_S,
     WalkSamples,
-    clean_labels,
     log10_shoe,
     quiet_phase,
     truth_speed,
-    walking_part,
+    walking_stance,
 )
 from pednav_env.calibration.strides import truth_glitches
 
@@ -56,8 +54,7 @@ def false_stance(samples: WalkSamples, log10_gammas: Sequence[float]) -> dict[st
     s = samples
     rate = float(s.rate_hz)
     log_t = log10_shoe(s.omega_b, s.f_b, rate, s.g)
-    source, stance, _, walking = walking_part(s, log_t)
-    stance = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
+    source, stance, walking = walking_stance(s, log_t)
     swing = walking & ~stance
     quiet = np.zeros_like(walking)
     if walking.sum() >= 2:

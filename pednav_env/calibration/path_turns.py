@@ -24,13 +24,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.calibration.stats import (
-    LABEL_MIN_RUN_S,
     StanceSource,
     WalkSamples,
-    clean_labels,
     log10_shoe,
     runs,
-    walking_part,
+    walking_stance,
 )
 from pednav_env.calibration.strides import stride_stances, truth_glitches
 from pednav_env.rotations import wrap_angle
@@ -48,6 +46,14 @@ MAX_STRIDE_S = 1.5
 MAX_ROUTE_TURN_RAD = math.pi / 2
 
 
+def _labelled_stance(samples: WalkSamples) -> tuple[StanceSource, NDArray[np.bool_]]:
+    """The walk's stance source and cleaned stance flags
+    (:func:`pednav_env.calibration.stats.walking_stance`)."""
+    s = samples
+    source, stance, _ = walking_stance(s, log10_shoe(s.omega_b, s.f_b, float(s.rate_hz), s.g))
+    return source, stance
+
+
 def footfall_points(samples: WalkSamples) -> Array:
     """``(K, 2)`` horizontal footfall points (m; module docstring); ``(0, 2)`` when the
     walk has neither footprints nor a truth track, or its stance comes from the detector
@@ -57,11 +63,9 @@ def footfall_points(samples: WalkSamples) -> Array:
         return np.asarray(s.footprints_m, dtype=float)[:, :2]
     if s.truth_pos is None:
         return np.zeros((0, 2))
-    rate = float(s.rate_hz)
-    source, stance, _, _ = walking_part(s, log10_shoe(s.omega_b, s.f_b, rate, s.g))
+    source, stance = _labelled_stance(s)
     if source == StanceSource.DETECTOR:
         return np.zeros((0, 2))
-    stance = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
     points = []
     for a, b in zip(*runs(stance), strict=True):
         xy = np.asarray(s.truth_pos[a:b, :2], dtype=float)
@@ -150,10 +154,9 @@ def _footfall_times(samples: WalkSamples) -> tuple[Array, Array, Array]:
     empty = np.zeros(0), np.zeros(0), np.zeros((0, 2))
     if s.truth_pos is None:
         return empty
-    source, stance, _, _ = walking_part(s, log10_shoe(s.omega_b, s.f_b, rate, s.g))
+    source, stance = _labelled_stance(s)
     if source == StanceSource.DETECTOR:
         return empty
-    stance = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
     pos = np.array(s.truth_pos[:, :2], dtype=float)
     for a, b in truth_glitches(s.truth_pos, rate):  # frozen, then a jump: no position
         pos[a : b + 1] = np.nan

@@ -351,7 +351,7 @@ def quiet_phase(log_shoe: Array, rate_hz: float) -> Flags:
     """Samples of ``log_shoe`` (a walking part) below :func:`quiet_threshold`, runs
     and gaps shorter than :data:`LABEL_MIN_RUN_S` cleaned as labels are."""
     quiet = log_shoe < quiet_threshold(log_shoe)
-    return clean_labels(quiet, max(1, int(round(LABEL_MIN_RUN_S * rate_hz))))
+    return clean_stance(quiet, rate_hz)
 
 
 def _path_length(pos: Array, mask: Flags) -> float:
@@ -363,6 +363,19 @@ def _path_length(pos: Array, mask: Flags) -> float:
 
 def _median(x: Array) -> float:
     return float(np.median(x)) if x.size else float("nan")
+
+
+def clean_stance(stance: Flags, rate_hz: float) -> Flags:
+    """Stance flags cleaned as every statistic here cleans labels: gaps and runs shorter
+    than :data:`LABEL_MIN_RUN_S` closed and dropped (:func:`clean_labels`)."""
+    return clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate_hz))))
+
+
+def walking_stance(samples: WalkSamples, log_shoe: Array) -> tuple[StanceSource, Flags, Flags]:
+    """:func:`walking_part`'s stance source, its stance flags cleaned
+    (:func:`clean_stance`) and its walking part."""
+    source, stance, _, walking = walking_part(samples, log_shoe)
+    return source, clean_stance(stance, float(samples.rate_hz)), walking
 
 
 def walking_part(samples: WalkSamples, log_shoe: Array) -> tuple[StanceSource, Flags, Flags, Flags]:
@@ -385,7 +398,7 @@ def walking_part(samples: WalkSamples, log_shoe: Array) -> tuple[StanceSource, F
         source, stance = StanceSource.DETECTOR, log_t < DETECTOR_STAND_LOG10
     # stands from the cleaned labels: a pause split by a one-sample flicker of the
     # labels (PyShoe's VICON labels flicker) is still a stand
-    stand = long_runs(clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate)))), stand_min)
+    stand = long_runs(clean_stance(stance, rate), stand_min)
     walking = ~stand
     if source is StanceSource.DETECTOR and walking.any():
         stance = stand | (log_t < quiet_threshold(log_t[walking]))
@@ -438,7 +451,7 @@ def _stride_stats(
     joins them (a merged run, its gaps included, is the stride's stance); with
     truth positions, strides overlapping a truth glitch left out and recorded."""
     n = stance.size
-    clean = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
+    clean = clean_stance(stance, rate)
     starts, ends = runs(clean)
     if s.footfall_index is not None:
         bounds = np.asarray(s.footfall_index, dtype=np.int64)

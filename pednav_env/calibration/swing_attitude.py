@@ -42,13 +42,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pednav_env.calibration.stats import (
-    LABEL_MIN_RUN_S,
     StanceSource,
     WalkSamples,
-    clean_labels,
     log10_shoe,
     runs,
-    walking_part,
+    walking_stance,
 )
 from pednav_env.calibration.swing_phases import MAX_SWING_S, MIN_SWING_S
 from pednav_env.rotations import dcm_to_euler
@@ -126,10 +124,9 @@ def swing_attitudes(samples: WalkSamples) -> SwingAttitudes:
     s = samples
     rate = float(s.rate_hz)
     log_t = log10_shoe(s.omega_b, s.f_b, rate, s.g)
-    source, stance, _, walking = walking_part(s, log_t)
+    source, stance, walking = walking_stance(s, log_t)
     if source == StanceSource.DETECTOR:
         raise ValueError(f"{s.name}: swing attitudes need stance labels or truth stance")
-    stance = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
     window = max(1, int(round(TILT_WINDOW_S * rate)))
     phases, angles, end_tilt, speed = [], [], [], []
     for a, b in zip(*runs(walking & ~stance), strict=True):

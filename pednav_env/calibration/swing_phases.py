@@ -35,14 +35,12 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from pednav_env.calibration.stats import (
-    LABEL_MIN_RUN_S,
     StanceSource,
     WalkSamples,
-    clean_labels,
     log10_shoe,
     runs,
     truth_speed,
-    walking_part,
+    walking_stance,
 )
 from pednav_env.calibration.strides import truth_glitches
 
@@ -73,10 +71,9 @@ def swing_samples(samples: WalkSamples) -> SwingSamples:
         raise ValueError(f"{s.name}: swing phases need truth positions (the foot speed)")
     rate = float(s.rate_hz)
     log_t = log10_shoe(s.omega_b, s.f_b, rate, s.g)
-    source, stance, _, walking = walking_part(s, log_t)
+    source, stance, walking = walking_stance(s, log_t)
     if source == StanceSource.DETECTOR:
         raise ValueError(f"{s.name}: swing phases need stance labels or truth stance")
-    stance = clean_labels(stance, max(1, int(round(LABEL_MIN_RUN_S * rate))))
     speed = truth_speed(s.truth_pos, rate)
     for a, b in truth_glitches(s.truth_pos, rate):
         speed[a : b + 1] = np.nan
