@@ -51,7 +51,7 @@ from pednav_env.calibration.compare import ENVELOPE_PERCENT, coverage_interval
 from pednav_env.calibration.path_turns import StrideSequence, route_turn_range, stride_sequence
 from pednav_env.calibration.sim_model import SimModel
 from pednav_env.calibration.sources import recording_from_simulation, samples_from_recording
-from pednav_env.calibration.stats import WalkSamples, walk_stats
+from pednav_env.calibration.stats import walk_stats
 from pednav_env.gait.foot import FootTrajectory
 from pednav_env.io import Footprints, Recording
 from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
@@ -240,13 +240,6 @@ def twin_speed(speed_mps: float) -> tuple[float, float]:
     return lo, hi
 
 
-def twin_turn(samples: WalkSamples) -> tuple[float, float] | None:
-    """The twins' turn per stride range (rad) for a recording:
-    :func:`~pednav_env.calibration.path_turns.route_turn_range` (at most π/2, the
-    route's limit); None without enough strides."""
-    return route_turn_range(samples)
-
-
 def twin_recordings(
     model: SimModel,
     walks: int,
@@ -323,7 +316,7 @@ def error_level(
             continue
         duration = max(rec.duration_s, MIN_DURATION_S)
         strides = stride_sequence(samples) if twins == "footfalls" else None
-        turn = twin_turn(samples) if twins != "straight" else None
+        turn = route_turn_range(samples) if twins != "straight" else None
         if strides is not None and strides.speed_mps.size >= MIN_TWIN_STRIDES:
             form = "footfalls"
             made = footfall_twin_recordings(

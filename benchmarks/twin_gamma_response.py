@@ -28,25 +28,22 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.stats import gmean
 from tqdm import tqdm
 
 from agents.choose_shoe import threshold_sweep
 from agents.error_level import DEFAULT_WALKS, MIN_TWIN_STRIDES, footfall_twin_recordings
+from benchmarks.gamma_response import THRESHOLDS
 from pednav_env.calibration.compare import MODELS
 from pednav_env.calibration.path_turns import stride_sequence
 from pednav_env.calibration.sources import samples_from_recording
 from pednav_env.io import load_recording
 from pednav_env.replay.setup import real_fixed_setup
 
-#: The γ grid of ``benchmarks/gamma_response.py``: 10^(7.125 + 0.25 k), k = 0 … 8.
-THRESHOLDS = tuple(float(10.0 ** (7.125 + 0.25 * k)) for k in range(9))
-
 
 def geometric_mean(values: np.ndarray) -> float:
-    """Geometric mean of positive values (inf if any is inf)."""
-    if np.any(~np.isfinite(values)):
-        return math.inf
-    return float(np.exp(np.mean(np.log(values))))
+    """Geometric mean of positive values (inf if any is inf; :func:`scipy.stats.gmean`)."""
+    return float(gmean(values))
 
 
 def run(pyshoe: Path, hallway: Path, walks: int, seed: int) -> dict[str, Any]:

@@ -19,11 +19,10 @@ from agents.error_level import (
     error_level,
     twin_recordings,
     twin_speed,
-    twin_turn,
     write_figure,
 )
 from pednav_env.calibration.compare import MODELS
-from pednav_env.calibration.path_turns import turn_range
+from pednav_env.calibration.path_turns import route_turn_range, turn_range
 from pednav_env.calibration.sources import samples_from_recording
 from pednav_env.io import load_recording
 from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
@@ -125,7 +124,7 @@ def test_twins_walk_the_recordings_turns():
     # the PyShoe trial walks circles: its twins turn within its own range per stride;
     # measured on the twins' truth, not taken from the twins' draws
     rec = load_recording(PYSHOE_SAMPLE)
-    turn = twin_turn(samples_from_recording(rec))
+    turn = route_turn_range(samples_from_recording(rec))
     assert turn is not None and turn[0] > 0.3  # the trials' circles, ~1 rad per stride
     report = error_level([rec], MODELS["calibrated"], walks=2, seed=3, twins="circles")
     assert report.rows[0].turn_rad == turn
