@@ -21,8 +21,11 @@ generic CSV with positions) or footprints (the hallway walks):
   the recording's |turn per stride| (at most π/2;
   :func:`pednav_env.calibration.path_turns.route_turn_range`), stops as the calibrated
   scenario draws them. ``"straight"``: the same with the scenario's straight legs and
-  turns. Recording r's walk i draws from ``numpy.random.default_rng([100000·seed + r,
-  i])``; the same filter and measure against the simulated truth (for a footprint walk,
+  turns. A recording's twin i draws from ``numpy.random.default_rng([seed, key, i])``,
+  ``key`` the recording's :func:`twin_key` (its footfall points to the millimetre), so
+  that its twins are the same whichever recordings are passed with it and in whatever
+  order, and the same for a walk read from its ``.mat`` or from its vendor CSV; the
+  same filter and measure against the simulated truth (for a footprint walk,
   footprints at the last sample of each simulated stance, the truth dropped, so that
   the twins are scored by the footprint error too);
 - *covered*: the recording's ARMSE inside the twins' 5–95 % range (order statistics; a
@@ -37,6 +40,7 @@ percentile's mean over n recordings has a standard deviation of 28.9/√n).
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -48,10 +52,15 @@ from numpy.typing import NDArray
 
 from agents.choose_shoe import lane_errors
 from pednav_env.calibration.compare import ENVELOPE_PERCENT, coverage_interval
-from pednav_env.calibration.path_turns import StrideSequence, route_turn_range, stride_sequence
-from pednav_env.calibration.sim_model import SimModel
+from pednav_env.calibration.path_turns import (
+    StrideSequence,
+    footfall_points,
+    route_turn_range,
+    stride_sequence,
+)
+from pednav_env.calibration.sim_model import SimModel, walk_entropy
 from pednav_env.calibration.sources import recording_from_simulation, samples_from_recording
-from pednav_env.calibration.stats import walk_stats
+from pednav_env.calibration.stats import WalkSamples, walk_stats
 from pednav_env.gait.foot import FootTrajectory
 from pednav_env.io import Footprints, Recording
 from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
@@ -73,6 +82,8 @@ DEFAULT_WALKS = 20
 TWIN_FORMS = ("footfalls", "circles", "straight")
 #: Fewest recorded strides the twins walk as they are.
 MIN_TWIN_STRIDES = 3
+#: A recording's :func:`twin_key` takes its footfall points rounded to this (m).
+TWIN_KEY_RESOLUTION_M = 1e-3
 
 
 @dataclass(frozen=True)
@@ -90,6 +101,8 @@ class RecordingLevel:
     #: How the twins walk (:data:`TWIN_FORMS`): the recording's own strides, circles of
     #: its turn per stride, or the scenario's straight legs.
     form: str = "straight"
+    #: The recording's :func:`twin_key` (its twins' seed is ``[seed, key]``).
+    key: int | None = None
 
     @property
     def envelope_m(self) -> tuple[float, float]:
@@ -132,6 +145,7 @@ class RecordingLevel:
             "error_m": num(self.error_m),
             "twins": int(self.twins_m.size),
             "twins_walk": self.form,
+            "twin_key": self.key,
             "twin_turn_per_stride_rad": None if self.turn_rad is None else list(self.turn_rad),
             "twins_diverged": int(np.sum(~np.isfinite(self.twins_m))),
             "twin_median_m": num(self.median_m),
@@ -240,16 +254,46 @@ def twin_speed(speed_mps: float) -> tuple[float, float]:
     return lo, hi
 
 
+def twin_key(samples: WalkSamples) -> int:
+    """A recording's identity for its twins' seeds (module docstring): the first 8 bytes
+    (little-endian, an integer below 2⁶⁴) of the SHA-256 of its footfall points
+    (:func:`pednav_env.calibration.path_turns.footfall_points`: its footprints, or the
+    mean truth position of each stance) in units of :data:`TWIN_KEY_RESOLUTION_M`,
+    rounded, as little-endian 64-bit integers x₁ y₁ x₂ y₂ …. The key depends on the walk,
+    not on its file: a hallway walk's ``.mat`` and its SensorConnect CSV carry the same
+    footprints and get the same key. A walk with no footfall points (no footprints, and
+    truth stances from the detector only) is known by its name instead: the SHA-256 of
+    ``"name:"`` and the name in UTF-8, so that a copy under another name draws other
+    twins."""
+    points = footfall_points(samples)
+    if points.size:
+        units = np.rint(points / TWIN_KEY_RESOLUTION_M).astype("<i8")
+        payload = units.tobytes()
+    else:
+        payload = b"name:" + samples.name.encode("utf-8")
+    return int.from_bytes(hashlib.sha256(payload).digest()[:8], "little")
+
+
+def twin_seed(seed: int, samples: WalkSamples) -> tuple[int, int]:
+    """The seed of a recording's twins: ``(seed, twin_key(samples))``; twin i draws
+    from ``numpy.random.default_rng([seed, key, i])``. ``seed`` ≥ 0 (the user's
+    ``--seed``)."""
+    if seed < 0:
+        raise ValueError(f"seed must be ≥ 0, got {seed}")
+    return (int(seed), twin_key(samples))
+
+
 def twin_recordings(
     model: SimModel,
     walks: int,
-    seed: int,
+    seed: int | Sequence[int],
     speed_mps: tuple[float, float],
     duration_s: float,
     footprints: bool,
     turn_per_stride_rad: tuple[float, float] | None = None,
 ) -> list[Recording]:
-    """``walks`` simulated twins (walk i from ``default_rng([seed, i])``) as recordings:
+    """``walks`` simulated twins (walk i from ``default_rng([seed, i])``, or
+    ``[*seed, i]`` for a sequence such as :func:`twin_seed`'s) as recordings:
     with their truth track, or with ``footprints`` footprints only (module docstring);
     with ``turn_per_stride_rad`` every leg on a circle."""
     truth, imu = model.batch(speed_mps, walks, seed, (duration_s, duration_s), turn_per_stride_rad)
@@ -257,10 +301,15 @@ def twin_recordings(
 
 
 def footfall_twin_recordings(
-    model: SimModel, walks: int, seed: int, strides: StrideSequence, footprints: bool
+    model: SimModel,
+    walks: int,
+    seed: int | Sequence[int],
+    strides: StrideSequence,
+    footprints: bool,
 ) -> list[Recording]:
     """``walks`` simulated twins that walk the recording's own strides
-    (:meth:`SimModel.footfall_batch`, walk i from ``default_rng([seed, i])``), as
+    (:meth:`SimModel.footfall_batch`, walk i from ``default_rng([seed, i])``, or
+    ``[*seed, i]`` for a sequence such as :func:`twin_seed`'s), as
     :func:`twin_recordings` returns them."""
     truth, imu = model.footfall_batch(*strides, walks, seed)
     return _as_recordings(model, truth, imu, walks, seed, footprints)
@@ -271,12 +320,13 @@ def _as_recordings(
     truth: FootTrajectory,
     imu: ImuMeasurements,
     walks: int,
-    seed: int,
+    seed: int | Sequence[int],
     footprints: bool,
 ) -> list[Recording]:
     out = []
     for i in range(walks):
-        rec = recording_from_simulation(truth, imu, i, f"{model.name}-{seed}-{i}")
+        entropy = "-".join(str(e) for e in walk_entropy(seed, i))
+        rec = recording_from_simulation(truth, imu, i, f"{model.name}-{entropy}")
         if footprints:
             stance = truth.stance[i, : rec.num_samples]
             last = np.flatnonzero(stance[:-1] & ~stance[1:])  # the last sample of a stance
@@ -297,14 +347,18 @@ def error_level(
 ) -> ErrorLevelReport:
     """The report of the module docstring for ``recordings`` and ``model``; ``setup``
     (named ``setup_name``) instead of ``real-fixed``'s if given; ``twins`` one of
-    :data:`TWIN_FORMS` (module docstring)."""
+    :data:`TWIN_FORMS` (module docstring). A recording's twins depend on ``seed``, the
+    recording (:func:`twin_seed`) and the other arguments, not on the other recordings
+    or their order."""
+    if seed < 0:
+        raise ValueError(f"seed must be ≥ 0, got {seed}")
     if walks < 2:
         raise ValueError(f"walks must be ≥ 2 (a spread of twins), got {walks}")
     if twins not in TWIN_FORMS:
         raise ValueError(f"twins must be one of {', '.join(TWIN_FORMS)}, got {twins!r}")
     setup = setup or real_fixed_setup()
     rows, not_checked = [], []
-    for r, rec in enumerate(recordings):
+    for rec in recordings:
         dense = rec.has_truth
         if not dense and rec.footprints is None:
             not_checked.append(rec.name)
@@ -317,17 +371,16 @@ def error_level(
         duration = max(rec.duration_s, MIN_DURATION_S)
         strides = stride_sequence(samples) if twins == "footfalls" else None
         turn = route_turn_range(samples) if twins != "straight" else None
+        entropy = twin_seed(seed, samples)
         if strides is not None and strides.speed_mps.size >= MIN_TWIN_STRIDES:
             form = "footfalls"
-            made = footfall_twin_recordings(
-                model, walks, 100_000 * seed + r, strides, footprints=not dense
-            )
+            made = footfall_twin_recordings(model, walks, entropy, strides, footprints=not dense)
         else:
             form = "straight" if turn is None else "circles"
             made = twin_recordings(
                 model,
                 walks,
-                100_000 * seed + r,
+                entropy,
                 twin_speed(speed),
                 duration,
                 footprints=not dense,
@@ -337,7 +390,9 @@ def error_level(
         own = float(lane_errors(rec, setup, {})[0])
         measure = "PyShoe ARMSE" if dense else "footprint error"
         rows.append(
-            RecordingLevel(rec.name, speed, rec.duration_s, own, errors, measure, turn, form)
+            RecordingLevel(
+                rec.name, speed, rec.duration_s, own, errors, measure, turn, form, entropy[1]
+            )
         )
     return ErrorLevelReport(model.name, walks, seed, rows, not_checked, setup_name)
 

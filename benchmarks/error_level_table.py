@@ -11,7 +11,12 @@ scenario's straight legs, as the table was first measured); the filter is
 (``real-fixed``'s own 2.25·10⁷ first). Per (model, γ): the recordings covered by their
 twins' 5–95 % range, the geometric mean of twins' median over the recording's error,
 and the mean percentile (50 ± 6.0 for 23 trials if the twins were the trials' own
-distribution). Nothing is chosen on these runs.
+distribution). A recording's twins draw from ``default_rng([seed, key, i])``, ``key`` its
+:func:`agents.error_level.twin_key` (its footfall points), so they are the twins
+``pednav sim2real --nav`` draws for it with the same ``--seed``; the stored
+``error_level_table.json`` and ``error_level_table_turns.json`` were measured before
+(recording r of a set, walk i: ``default_rng([100000·seed + r, i])``). Nothing is chosen
+on these runs.
 
     PYTHONPATH=. .venv/bin/python benchmarks/error_level_table.py \\
         --json benchmarks/results/error_level_table_footfalls.json

@@ -4,9 +4,10 @@ recordings' own strides")
 
 For each of the 23 PyShoe development trials and the 8 hallway walks (``*_LLIO.mat``),
 20 simulated twins that walk the recording's strides (``pednav sim2real --nav``'s
-footfall twins, :mod:`agents.error_level`; the shipped calibrated model; recording r's
-twin i from ``default_rng([r, i])``, r the recording's place in its set, as
-``benchmarks/error_level_table.py`` draws them), and ``real-fixed``'s setup
+footfall twins, :mod:`agents.error_level`; the shipped calibrated model; a recording's
+twin i from ``default_rng([seed, key, i])``, ``key`` its
+:func:`agents.error_level.twin_key`, as ``pednav sim2real --nav`` and
+``benchmarks/error_level_table.py`` draw them), and ``real-fixed``'s setup
 with its threshold γ on the grid of ``benchmarks/gamma_response.py`` (1.3·10⁷ …
 1.3·10⁹), the other knobs ``real-fixed``'s. Per recording and γ: the recording's own
 error and its twins' median (PyShoe ARMSE, or the mean footprint error for the hallway
@@ -15,8 +16,12 @@ recordings of each. Each curve's best γ, and its value at 1.3·10⁹ over its m
 Nothing is chosen on these runs (the verdict's rule was written before them).
 
     PYTHONPATH=. .venv/bin/python benchmarks/twin_gamma_response.py \\
-        --json benchmarks/results/twin_gamma_response.json \\
-        --plot docs/figures/twin_gamma_response.png
+        --json benchmarks/results/twin_gamma_response_stable_seeds.json \\
+        --plot docs/figures/twin_gamma_response_stable_seeds.png
+
+``benchmarks/results/twin_gamma_response.json`` and ``docs/figures/twin_gamma_response.png``
+are the first run's, whose twins drew from ``default_rng([r, i])``, r the recording's
+place in its set (``--load`` shows them).
 """
 
 from __future__ import annotations
@@ -32,7 +37,12 @@ from scipy.stats import gmean
 from tqdm import tqdm
 
 from agents.choose_shoe import threshold_sweep
-from agents.error_level import DEFAULT_WALKS, MIN_TWIN_STRIDES, footfall_twin_recordings
+from agents.error_level import (
+    DEFAULT_WALKS,
+    MIN_TWIN_STRIDES,
+    footfall_twin_recordings,
+    twin_seed,
+)
 from benchmarks.gamma_response import THRESHOLDS
 from pednav_env.calibration.compare import MODELS
 from pednav_env.calibration.path_turns import stride_sequence
@@ -56,13 +66,14 @@ def run(pyshoe: Path, hallway: Path, walks: int, seed: int) -> dict[str, Any]:
     out: dict[str, Any] = {"thresholds": list(THRESHOLDS), "walks": walks, "seed": seed}
     for set_name, paths in sets.items():
         own_rows, twin_rows, names = [], [], []
-        for r, path in enumerate(tqdm(paths, desc=set_name, leave=False)):
+        for path in tqdm(paths, desc=set_name, leave=False):
             rec = load_recording(path)
-            strides = stride_sequence(samples_from_recording(rec))
+            samples = samples_from_recording(rec)
+            strides = stride_sequence(samples)
             if strides.speed_mps.size < MIN_TWIN_STRIDES:
                 raise ValueError(f"{path}: fewer than {MIN_TWIN_STRIDES} strides for twins")
             twins = footfall_twin_recordings(
-                model, walks, 100_000 * seed + r, strides, footprints=not rec.has_truth
+                model, walks, twin_seed(seed, samples), strides, footprints=not rec.has_truth
             )
             own_rows.append(threshold_sweep(setup, [rec], THRESHOLDS)[0])
             twin_rows.append(np.median(threshold_sweep(setup, twins, THRESHOLDS), axis=0))

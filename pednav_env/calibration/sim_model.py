@@ -27,6 +27,16 @@ SIM_DURATION_S = (30.0, 60.0)
 SIM_RATE_HZ = 200.0
 
 
+def walk_entropy(seed: int | Sequence[int], walk: int) -> list[int]:
+    """The entropy list walk ``walk`` of a batch seeded with ``seed`` draws from
+    (``numpy.random.default_rng(walk_entropy(seed, walk))``): ``[seed, walk]`` for an
+    integer seed, ``[*seed, walk]`` for a sequence of non-negative integers (e.g. a
+    seed and a recording's key, as ``pednav sim2real --nav``'s twins draw)."""
+    if isinstance(seed, (int, np.integer)):
+        return [int(seed), walk]
+    return [*(int(s) for s in seed), walk]
+
+
 @dataclass(frozen=True)
 class SimModel:
     """A simulator configuration: IMU grade and stance dynamics.
@@ -47,14 +57,15 @@ class SimModel:
         self,
         speed_mps: tuple[float, float],
         walks: int,
-        seed: int,
+        seed: int | Sequence[int],
         duration_s: tuple[float, float] = SIM_DURATION_S,
         turn_per_stride_rad: tuple[float, float] | None = None,
         turns_per_walk: Sequence[tuple[float, float] | None] | None = None,
     ) -> tuple[FootTrajectory, ImuMeasurements]:
         """``walks`` simulated walks with every stride's speed in ``speed_mps``,
         ``duration_s`` long, truth and IMU readings; walk i draws from
-        ``default_rng([seed, i])`` (its walker, route and IMU errors). With
+        ``default_rng([seed, i])`` (its walker, route and IMU errors;
+        ``[*seed, i]`` for a sequence, :func:`walk_entropy`). With
         ``turn_per_stride_rad`` every leg walks a circle
         (:class:`pednav_env.gait.speed_route.SpeedRouteConfig`); ``turns_per_walk``
         (``walks`` entries) gives walk i its own, None for the scenario's legs."""
@@ -62,7 +73,7 @@ class SimModel:
             raise ValueError(
                 f"turns_per_walk must have one entry per walk ({walks}), got {len(turns_per_walk)}"
             )
-        rngs = [np.random.default_rng([seed, i]) for i in range(walks)]
+        rngs = [np.random.default_rng(walk_entropy(seed, i)) for i in range(walks)]
         routes = []
         for i, rng in enumerate(rngs):
             motion = None if self.stance is None else self.stance.draw(rng)
@@ -82,13 +93,14 @@ class SimModel:
         turn_rad: Sequence[float],
         stop_s: Sequence[float],
         walks: int,
-        seed: int,
+        seed: int | Sequence[int],
     ) -> tuple[FootTrajectory, ImuMeasurements]:
         """``walks`` simulated walks of one stride sequence
         (:func:`pednav_env.gait.speed_route.footfall_route`: stride i at ``speed_mps[i]``,
         turning by ``turn_rad[i]`` after a stand of ``stop_s[i]`` s); walk i draws its
-        walker, stride shapes and IMU errors from ``default_rng([seed, i])``."""
-        rngs = [np.random.default_rng([seed, i]) for i in range(walks)]
+        walker, stride shapes and IMU errors from ``default_rng([seed, i])``
+        (``[*seed, i]`` for a sequence, :func:`walk_entropy`)."""
+        rngs = [np.random.default_rng(walk_entropy(seed, i)) for i in range(walks)]
         routes = []
         for rng in rngs:
             motion = None if self.stance is None else self.stance.draw(rng)

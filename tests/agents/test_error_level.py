@@ -17,14 +17,16 @@ from agents.error_level import (
     ErrorLevelReport,
     RecordingLevel,
     error_level,
+    twin_key,
     twin_recordings,
+    twin_seed,
     twin_speed,
     write_figure,
 )
 from pednav_env.calibration.compare import MODELS
 from pednav_env.calibration.path_turns import route_turn_range, turn_range
 from pednav_env.calibration.sources import samples_from_recording
-from pednav_env.io import load_recording
+from pednav_env.io import Footprints, load_recording
 from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
 
 TWINS = np.arange(1, 21) / 10.0  # 0.1 … 2.0 m
@@ -197,3 +199,65 @@ def test_the_figure(tmp_path):
     assert path == tmp_path / "error_level_m.png"
     assert path.stat().st_size > 10_000
     assert write_figure(ErrorLevelReport("m", 20, 0, [], ["x"]), tmp_path / "none") is None
+
+
+def _twins_by_name(report: ErrorLevelReport) -> dict[str, list[float]]:
+    return {r.name: r.twins_m.tolist() for r in report.rows}
+
+
+def test_a_recordings_twins_do_not_depend_on_the_others_or_their_order():
+    trial = load_recording(PYSHOE_SAMPLE)
+    walk = load_recording(HALLWAY_DATA / "SensorConnectData_31_first5s.csv")
+    model = MODELS["calibrated"]
+    alone = {
+        **_twins_by_name(error_level([trial], model, walks=2, seed=3)),
+        **_twins_by_name(error_level([walk], model, walks=2, seed=3)),
+    }
+    first = _twins_by_name(error_level([trial, walk], model, walks=2, seed=3))
+    second = _twins_by_name(error_level([walk, trial], model, walks=2, seed=3))
+    assert first == second == alone
+    # the two recordings' twins differ: the key is the recording's
+    assert alone[trial.name] != alone[walk.name]
+
+
+def test_the_twin_key_is_the_walks_footfalls_not_its_file():
+    mat = load_recording(HALLWAY_DATA / "SensorConnectData_31_first9s_LLIO.mat")
+    csv = load_recording(HALLWAY_DATA / "SensorConnectData_31_first5s.csv")
+    # the CSV excerpt holds the footprints before sample 1000 (5 s at 200 Hz): the .mat
+    # cut to those is the same walk read from another file
+    assert mat.footprints is not None and csv.footprints is not None
+    early = np.asarray(mat.footprints.sample) < 1000
+    cut = replace(
+        mat,
+        footprints=Footprints(
+            np.asarray(mat.footprints.sample)[early],
+            np.asarray(mat.footprints.pos)[early],
+            mat.footprints.source,
+        ),
+    )
+    key = twin_key(samples_from_recording(csv))
+    assert twin_key(samples_from_recording(cut)) == key
+    assert twin_key(samples_from_recording(mat)) != key  # more footfalls: another walk
+    assert twin_seed(5, samples_from_recording(csv)) == (5, key)
+    assert 0 <= key < 2**64
+    # a walk under another name keeps its key; a walk without footfall points has its
+    # name's
+    trial = samples_from_recording(load_recording(PYSHOE_SAMPLE))
+    assert twin_key(replace(trial, name="renamed")) == twin_key(trial)
+    bare = replace(trial, truth_pos=None)
+    assert twin_key(bare) != twin_key(replace(bare, name="renamed"))
+    with pytest.raises(ValueError, match="seed must be ≥ 0"):
+        twin_seed(-1, trial)
+
+
+def test_the_cli_and_the_library_draw_the_same_twins(capsys: pytest.CaptureFixture[str]):
+    walk_path = HALLWAY_DATA / "SensorConnectData_31_first5s.csv"
+    args = ["sim2real", str(PYSHOE_SAMPLE), str(walk_path), "--walks", "2", "--nav"]
+    assert main([*args, "--nav-walks", "2", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["error_level"]["rows"]
+    walk = load_recording(walk_path)
+    (library,) = error_level([walk], MODELS["calibrated"], walks=2, seed=0).rows
+    (cli,) = (r for r in rows if r["name"] == walk.name)
+    assert cli["twin_key"] == library.key == twin_key(samples_from_recording(walk))
+    assert cli["twin_median_m"] == library.median_m
+    assert cli["twin_envelope_m"] == list(library.envelope_m)
