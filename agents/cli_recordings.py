@@ -249,7 +249,9 @@ def add_recording_commands(sub: argparse._SubParsersAction) -> None:
     ru.add_argument(
         "--policy",
         default="real-fixed",
-        help="real-fixed (default: the configuration chosen on real walks), paper (paper "
+        help="real-fixed (default: the configuration chosen on real walks), twins "
+        "(real-fixed with its SHOE threshold chosen for the recording on simulated twins of "
+        "its own strides; about 5 s per recording), paper (paper "
         "003's filter; fails at walking speed on some sensors), a setup JSON file "
         "(docs/REAL_DATA.md), or a policy name/path as in `pednav evaluate`",
     )

@@ -39,7 +39,13 @@ from pednav_env.io import CsvLayout, LoadOptions, Recording, find_recordings, lo
 from pednav_env.io.hallway import AUTO, FootprintChoice
 from pednav_env.replay.metrics import footprint_errors, loop_closure, track_errors
 from pednav_env.replay.runner import PreparedRecording, RecordingRun, prepare, run_prepared
-from pednav_env.replay.setup import SETUP_NAMES, RealFilterSetup, load_setup, named_setup
+from pednav_env.replay.setup import (
+    SETUP_NAMES,
+    RealFilterSetup,
+    load_setup,
+    named_setup,
+    real_fixed_setup,
+)
 from pednav_env.replay.simulate import check_output_path as output_file
 from pednav_env.replay.track import run_states, write_track_csv
 
@@ -52,6 +58,12 @@ FOOTPRINT_KEYS = (
 )
 #: The default policy of ``pednav run``: the configuration chosen on real walks.
 DEFAULT_POLICY = "real-fixed"
+#: ``--policy twins``: ``real-fixed`` with its SHOE threshold chosen for each recording on
+#: simulated twins of the recording's own strides as its IMU shows them
+#: (:func:`agents.twin_choice.choose_threshold_on_twins`; no truth used).
+TWIN_POLICY = "twins"
+#: Seed of ``--policy twins``: twin i draws from ``numpy.random.default_rng([TWIN_SEED, i])``.
+TWIN_SEED = 0
 
 #: The simulated env whose policies (tuned, adaptive, pretrained) are used.
 SIM_ENV_ID = "pednav/FootZupt-v0"
@@ -131,11 +143,40 @@ def knob_schedule(
 
 def run_named(rec: Recording, policy_name: str, track: bool = False) -> RecordingRun:
     """``rec`` filtered under a policy name of ``pednav run --policy`` (a fixed
-    setup, or a policy driving the replay core; :func:`resolve_policy`)."""
+    setup, ``twins``, or a policy driving the replay core; :func:`resolve_policy`)."""
+    if policy_name == TWIN_POLICY:
+        return run_twin_choice(rec, real_fixed_setup(), track)[0]
     policy = resolve_policy(policy_name)
     if isinstance(policy, RealFilterSetup):
         return run_prepared(prepare(rec, policy), track=track)
     return run_with_policy(rec, policy, track=track)[0]
+
+
+def run_twin_choice(
+    rec: Recording, base: RealFilterSetup, track: bool = False
+) -> tuple[RecordingRun, dict[str, Any]]:
+    """``rec`` filtered with ``base`` and the SHOE threshold chosen for it on simulated
+    twins of its own IMU-estimated strides (:data:`TWIN_POLICY`), and the choice as
+    ``pednav run --json`` reports it under ``twin_choice``. The twins are scored by
+    their footprint error when the recording has footprints and no truth track
+    (as the recording is), else by their ARMSE."""
+    from agents.twin_choice import TWIN_WALKS, choose_threshold_on_twins
+
+    metric = "footprints" if rec.footprints is not None and not rec.has_truth else "armse"
+    choice = choose_threshold_on_twins(rec, TWIN_SEED, setup=base, twin_metric=metric)
+    info = {
+        "shoe_threshold": choice.threshold,
+        "route_strides": int(choice.strides.speed_mps.size),
+        "route_median_speed_mps": float(np.median(choice.strides.speed_mps)),
+        "twins": TWIN_WALKS,
+        "seed": TWIN_SEED,
+        "twin_metric": metric,
+        "twin_median_m": {
+            f"{g:.4g}": float(m) if np.isfinite(m) else None
+            for g, m in zip(choice.thresholds, choice.twin_median_m, strict=True)
+        },
+    }
+    return run_prepared(prepare(rec, choice.setup), track=track), info
 
 
 def summarize(rec: Recording, run: RecordingRun) -> dict[str, Any]:
@@ -173,6 +214,8 @@ def resolve_policy(name: str) -> RealFilterSetup | str:
     from agents.evaluate import BUILTIN_POLICIES
     from agents.policies import split_name
 
+    if name == TWIN_POLICY:
+        return name
     if name in SETUP_NAMES:
         return named_setup(name)
     if split_name(name)[0] == "oracle":
@@ -186,7 +229,7 @@ def resolve_policy(name: str) -> RealFilterSetup | str:
         return name
     others = [n for n in dict.fromkeys(SETUP_NAMES + BUILTIN_POLICIES) if n != DEFAULT_POLICY]
     raise ValueError(
-        f"unknown policy {name!r}: use {DEFAULT_POLICY} (the default), "
+        f"unknown policy {name!r}: use {DEFAULT_POLICY} (the default), {TWIN_POLICY}, "
         f"{', '.join(n for n in others if n != 'oracle')}, "
         "a setup JSON file, or a path to a run directory or saved SB3 model (.zip)"
     )
@@ -198,7 +241,7 @@ def check_policy(name: str) -> None:
     refuse it before it starts."""
     from gymnasium import spaces
 
-    if isinstance(resolve_policy(name), str):
+    if name != TWIN_POLICY and isinstance(resolve_policy(name), str):
         _load_policy(name, spaces.Box(-1.0, 1.0, (4,), np.float32))
 
 
@@ -250,14 +293,23 @@ def run(
     out = None if out is None else check_output_path(out, "--out")
     rec = load_recording(path, o.fmt, o.load, o.layout, o.footprints)
     track = out is not None
-    if isinstance(policy, RealFilterSetup):
+    twin_choice = None
+    if policy == TWIN_POLICY:
+        base = real_fixed_setup()
+        base = base if o.mounting is None else replace(base, mounting=o.mounting)
+        result, twin_choice = run_twin_choice(rec, base, track)
+    elif isinstance(policy, RealFilterSetup):
         setup = policy if o.mounting is None else replace(policy, mounting=o.mounting)
         result = run_prepared(prepare(rec, setup), track=track)
     else:
         if o.mounting is not None:
-            raise ValueError("--mounting applies to the fixed setups (paper, real-fixed, JSON)")
+            raise ValueError(
+                "--mounting applies to the fixed setups (paper, real-fixed, JSON) and twins"
+            )
         result, _ = run_with_policy(rec, policy, track=track)
     summary = summarize(rec, result)
+    if twin_choice is not None:
+        summary["twin_choice"] = twin_choice
     if plot is not None:
         from agents.run_plot import write_plot
 
@@ -386,6 +438,12 @@ def format_text(name: str, summary: dict[str, Any], issues: str = "") -> str:
         ]
     if "loop_closure_m" in summary:
         lines.append(f"loop closure     {summary['loop_closure_m']:.3f} m (end − start)")
+    if "twin_choice" in summary:
+        c = summary["twin_choice"]
+        lines.append(
+            f"SHOE threshold   {c['shoe_threshold']:.3g}, chosen on {c['twins']} simulated twins "
+            f"of {c['route_strides']} strides at a median {c['route_median_speed_mps']:.2f} m/s"
+        )
     if issues:
         lines.append(issues)
     return "\n".join(lines)

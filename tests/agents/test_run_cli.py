@@ -360,3 +360,45 @@ def test_truth_glitches_are_reported(capsys, tmp_path):
     assert out["truth_glitch_samples"] == b - a + 1  # the frozen samples and the one after
     assert main(["run", str(frozen)]) == 0
     assert "truth glitches   1 (61 samples" in capsys.readouterr().out
+
+
+def test_twins_policy_chooses_the_threshold_it_runs(capsys):
+    """``--policy twins``: real-fixed with the SHOE threshold chosen on twins of the
+    recording's own strides; the JSON reports the choice and the run uses it."""
+    from dataclasses import replace
+
+    from agents.run_recording import summarize
+    from agents.twin_choice import TWIN_THRESHOLDS
+    from pednav_env.io import load_recording
+    from pednav_env.replay.runner import prepare, run_prepared
+    from pednav_env.replay.setup import real_fixed_setup
+
+    assert main(["run", str(PYSHOE), "--json", "--policy", "twins"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    choice = out["twin_choice"]
+    assert choice["shoe_threshold"] in TWIN_THRESHOLDS
+    assert choice["twin_metric"] == "armse" and choice["twins"] == 20
+    assert choice["route_strides"] >= 3
+    medians = [m for m in choice["twin_median_m"].values() if m is not None]
+    assert len(choice["twin_median_m"]) == len(TWIN_THRESHOLDS)
+    assert min(medians) == choice["twin_median_m"][f"{choice['shoe_threshold']:.4g}"]
+    setup = real_fixed_setup()
+    detector = replace(setup.filter.detector, threshold=choice["shoe_threshold"])
+    chosen = replace(setup, filter=replace(setup.filter, detector=detector))
+    rec = load_recording(PYSHOE)
+    expected = summarize(rec, run_prepared(prepare(rec, chosen)))
+    assert out["armse_pyshoe_m"] == pytest.approx(expected["armse_pyshoe_m"], rel=1e-12)
+    assert main(["run", str(PYSHOE), "--policy", "twins"]) == 0
+    assert "chosen on 20 simulated twins" in capsys.readouterr().out
+
+
+def test_twins_policy_on_footprint_walks_scores_twins_by_footprints(capsys):
+    assert main(["run", str(HALLWAY_MAT), "--json", "--policy", "twins"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["twin_choice"]["twin_metric"] == "footprints"
+    assert FOOTPRINT_KEYS <= set(out)
+
+
+def test_unknown_policy_lists_twins(capsys):
+    err = one_line_error(capsys, ["run", str(XIO), "--policy", "twin"], "unknown policy")
+    assert "twins" in err
