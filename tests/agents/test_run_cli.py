@@ -399,6 +399,10 @@ def test_twins_policy_on_footprint_walks_scores_twins_by_footprints(capsys):
     assert FOOTPRINT_KEYS <= set(out)
 
 
+def test_twins_policy_on_a_walk_too_short_for_twins_is_one_line(capsys):
+    one_line_error(capsys, ["run", str(XIO), "--policy", "twins"], "strides in its route")
+
+
 def test_unknown_policy_lists_twins(capsys):
     err = one_line_error(capsys, ["run", str(XIO), "--policy", "twin"], "unknown policy")
     assert "twins" in err
