@@ -32,17 +32,17 @@ from __future__ import annotations
 
 import argparse
 import json
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from agents.run_recording import summarize
+from agents.twin_choice import with_threshold
 from benchmarks.transfer_by_regime import paired_ratio_ci, verdict
 from pednav_env.io import load_recording
 from pednav_env.replay.runner import prepare, run_prepared
-from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
+from pednav_env.replay.setup import real_fixed_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
@@ -65,12 +65,6 @@ def leave_one_out_choice(twin_median_m: np.ndarray) -> np.ndarray:
         others = np.delete(errors, i, axis=0)
         chosen[i] = int(np.argmin(np.mean(others, axis=0)))
     return chosen
-
-
-def with_threshold(setup: RealFilterSetup, threshold: float) -> RealFilterSetup:
-    """``setup`` with its SHOE threshold γ replaced."""
-    detector = replace(setup.filter.detector, threshold=float(threshold))
-    return replace(setup, filter=replace(setup.filter, detector=detector))
 
 
 def as_array(rows: list[list[float | None]]) -> np.ndarray:
