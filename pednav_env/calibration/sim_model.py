@@ -68,7 +68,10 @@ class SimModel:
         ``[*seed, i]`` for a sequence, :func:`walk_entropy`). With
         ``turn_per_stride_rad`` every leg walks a circle
         (:class:`pednav_env.gait.speed_route.SpeedRouteConfig`); ``turns_per_walk``
-        (``walks`` entries) gives walk i its own, None for the scenario's legs."""
+        (``walks`` entries) gives walk i its own, None for the scenario's legs; giving
+        both is a ``ValueError``."""
+        if turns_per_walk is not None and turn_per_stride_rad is not None:
+            raise ValueError("give turn_per_stride_rad or turns_per_walk, not both")
         if turns_per_walk is not None and len(turns_per_walk) != walks:
             raise ValueError(
                 f"turns_per_walk must have one entry per walk ({walks}), got {len(turns_per_walk)}"

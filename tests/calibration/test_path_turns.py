@@ -86,6 +86,10 @@ def test_each_walk_its_own_turn():
     assert turn_range(samples_from_simulation(truth, imu, 1))[0] < 0.05
     with pytest.raises(ValueError, match="turns_per_walk"):
         MODELS["calibrated"].batch((0.9, 1.1), 2, 5, (30.0, 30.0), turns_per_walk=[None])
+    with pytest.raises(ValueError, match="not both"):
+        MODELS["calibrated"].batch(
+            (0.9, 1.1), 2, 5, (30.0, 30.0), (0.5, 0.6), turns_per_walk=[None, None]
+        )
 
 
 def _stats(name: str, turn):
