@@ -37,6 +37,7 @@ import pednav_env  # noqa: F401  (registers the environments)
 from agents.backends import one_torch_thread
 from agents.features import HISTORY, HistoryFeatures, feature_dim
 from baselines.oracle import OraclePolicy
+from pednav_env.files import writing
 from pednav_env.sb3 import NativeVecEnv
 
 
@@ -202,8 +203,10 @@ def run_distillation(
     vec.close()
     run_dir = Path(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
-    model.save(run_dir / "model.zip")
-    norm.save(str(run_dir / "vecnormalize.pkl"))
+    with writing(run_dir / "model.zip"):
+        model.save(run_dir / "model.zip")
+    with writing(run_dir / "vecnormalize.pkl"):
+        norm.save(str(run_dir / "vecnormalize.pkl"))
     meta = {
         "env_id": env_id,
         "algo": "ppo",
@@ -225,5 +228,6 @@ def run_distillation(
     }
     if filter_family is not None:
         meta["filter"] = filter_family
-    (run_dir / "meta.json").write_text(json.dumps(meta, indent=2) + "\n")
+    with writing(run_dir / "meta.json"):
+        (run_dir / "meta.json").write_text(json.dumps(meta, indent=2) + "\n")
     return run_dir

@@ -61,6 +61,7 @@ from pednav_env.calibration.path_turns import (
 from pednav_env.calibration.sim_model import SimModel, walk_entropy
 from pednav_env.calibration.sources import recording_from_simulation, samples_from_recording
 from pednav_env.calibration.stats import WalkSamples, walk_stats
+from pednav_env.files import save_figure
 from pednav_env.gait.foot import FootTrajectory
 from pednav_env.io import Footprints, Recording
 from pednav_env.replay.setup import RealFilterSetup, real_fixed_setup
@@ -447,6 +448,6 @@ def write_figure(report: ErrorLevelReport, directory: str | Path) -> Path | None
     )
     fig.tight_layout()
     path = Path(directory) / f"error_level_{report.model}.png"
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return path

@@ -23,6 +23,7 @@ import numpy as np
 from agents.episode_result import EpisodeResult
 from agents.policies import ZERO_ACTION
 from baselines.oracle import LABEL as ORACLE_LABEL
+from pednav_env.files import save_figure
 
 #: Envs whose error does not accumulate with the distance walked: no "% of distance".
 NO_DISTANCE_PERCENT = frozenset({"pednav/MarkerTrack-v0"})
@@ -241,7 +242,7 @@ def write_plots(
     ax_n.grid(True, alpha=0.3)
     ax_n.set_xlabel("time since navigation start (s)" if interval_s else "decision step")
     files = [out / "error_over_time.png"]
-    fig.savefig(files[0], dpi=110)
+    save_figure(fig, files[0], dpi=110)
     plt.close(fig)
 
     paper = np.array([r.mean_error for r in outcomes["paper"]])
@@ -269,6 +270,6 @@ def write_plots(
     )
     ax.legend(fontsize="small", loc="upper left")
     files.append(out / "per_episode.png")
-    fig.savefig(files[1], dpi=110)
+    save_figure(fig, files[1], dpi=110)
     plt.close(fig)
     return files

@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from pednav_env.envs.foot_core import OBS_FEATURES
+from pednav_env.files import writing
 
 #: The shipped parameters (found on simulated training walks only): ``gait-rule``.
 PARAMS_FILE = Path(__file__).parent / "pretrained" / "gait_rule.json"
@@ -171,5 +172,6 @@ def write_params(params: GaitRuleParams, path: str | Path, record: dict[str, Any
         **record,
     }
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, indent=2) + "\n")
+    with writing(path):
+        path.write_text(json.dumps(data, indent=2) + "\n")
     return path

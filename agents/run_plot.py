@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pednav_env.files import save_figure
 from pednav_env.io import Recording
 from pednav_env.replay.metrics import aligned_reference, footprint_errors, rotate_h
 from pednav_env.replay.runner import RecordingRun
@@ -54,5 +55,5 @@ def write_plot(rec: Recording, run: RecordingRun, path: Path, label: str) -> Non
     ax.set_title(rec.name, fontsize=10)
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)

@@ -39,6 +39,7 @@ import pednav_env  # noqa: F401  (registers the environments)
 from agents.backends import one_torch_thread
 from agents.policies import FAMILY_ENVS
 from pednav_env.envs.foot_filters import LEARNED_FAMILY
+from pednav_env.files import writing
 from pednav_env.sb3 import NativeVecEnv
 from pednav_env.seeds import training_seed
 
@@ -152,7 +153,8 @@ def train(
     )
     remaining = timesteps - (model.num_timesteps if latest is not None else 0)
     start = time.perf_counter()
-    with one_torch_thread():  # the same weights in any process (agents.backends)
+    # checkpoints/ and tb/ are written during learn: a failed write there names the run dir
+    with one_torch_thread(), writing(run_dir):  # the same weights in any process
         model.learn(
             max(remaining, 0),
             callback=callback,
@@ -161,8 +163,10 @@ def train(
             tb_log_name=algo,
         )
     seconds = time.perf_counter() - start
-    model.save(run_dir / "model.zip")
-    vec.save(str(run_dir / "vecnormalize.pkl"))
+    with writing(run_dir / "model.zip"):
+        model.save(run_dir / "model.zip")
+    with writing(run_dir / "vecnormalize.pkl"):
+        vec.save(str(run_dir / "vecnormalize.pkl"))
     meta = {
         "env_id": env_id,
         "algo": algo,
@@ -178,7 +182,8 @@ def train(
     }
     if family is not None:
         meta["filter"] = family
-    meta_file.write_text(json.dumps(meta, indent=2, default=str))
+    with writing(meta_file):
+        meta_file.write_text(json.dumps(meta, indent=2, default=str))
     vec.close()
     return run_dir
 

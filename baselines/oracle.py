@@ -53,6 +53,7 @@ from pednav_env.envs.marker_config import CONTEXT_FIELDS as MARKER_CONTEXT_FIELD
 from pednav_env.envs.marker_config import MarkerTrackConfig
 from pednav_env.envs.waist_config import CONTEXT_FIELDS as WAIST_CONTEXT_FIELDS
 from pednav_env.envs.waist_config import WaistStepConfig
+from pednav_env.files import writing
 
 #: The shipped per-context table (one entry per env id).
 RESULTS_FILE = Path(__file__).parent / "oracle_actions.json"
@@ -296,5 +297,6 @@ def save_table_entry(env_id: str, entry: dict[str, Any], path: Path) -> Path:
     table = read_table(path) if path.exists() else {}
     table[env_id] = entry
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(table, indent=2) + "\n")
+    with writing(path):
+        path.write_text(json.dumps(table, indent=2) + "\n")
     return path

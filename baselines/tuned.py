@@ -28,6 +28,7 @@ import numpy as np
 from gymnasium import spaces
 
 from baselines.rollout import first_episode_errors
+from pednav_env.files import writing
 from pednav_env.seeds import REEVALUATION_SEED, SEARCH_SEED
 
 #: The shipped search results (one entry per env id).
@@ -121,7 +122,8 @@ def save_result(env_id: str, result: dict[str, Any], path: Path) -> Path:
     table = read_results(path) if path.exists() else {}
     table[env_id] = result
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(table, indent=2) + "\n")
+    with writing(path):
+        path.write_text(json.dumps(table, indent=2) + "\n")
     return path
 
 

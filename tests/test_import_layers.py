@@ -6,11 +6,12 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-NAV = {"checks", "constants", "draws", "rotations", "gait", "sensors", "nav"}
+NAV = {"checks", "constants", "draws", "files", "rotations", "gait", "sensors", "nav"}
 ENVS = NAV | {"io", "replay", "envs", "seeds", "pednav_env"}  # pednav_env: the registering __init__
 #: What each unit (a pednav_env subpackage or module, baselines, agents) may import.
 MAY_IMPORT = {
     "checks": set(),
+    "files": set(),
     "constants": set(),
     "rotations": set(),
     "draws": set(),

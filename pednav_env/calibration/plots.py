@@ -22,6 +22,7 @@ from pednav_env.calibration.compare import (
     band_label,
     stride_quietness_by_bin,
 )
+from pednav_env.files import save_figure
 
 
 def write_figures(report: Sim2RealReport, directory: str | Path) -> list[Path]:
@@ -62,7 +63,7 @@ def write_figures(report: Sim2RealReport, directory: str | Path) -> list[Path]:
         ax.legend(fontsize=8)
         fig.tight_layout()
         path = out_dir / f"sim2real_{report.model}_{band_label(band.band).replace('>', 'over')}.png"
-        fig.savefig(path, dpi=110)
+        save_figure(fig, path, dpi=110)
         plt.close(fig)
         paths.append(path)
     stride_path = _stride_figure(report, out_dir, plt)
@@ -104,6 +105,6 @@ def _stride_figure(report: Sim2RealReport, out_dir: Path, plt: Any) -> Path | No
     ax.legend(fontsize=8)
     fig.tight_layout()
     path = out_dir / f"sim2real_{report.model}_strides.png"
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return path

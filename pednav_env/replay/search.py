@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from pednav_env.files import writing
 from pednav_env.io.recording import Recording
 from pednav_env.nav.detectors import ShoeDetectorConfig, ThresholdDetectorConfig
 from pednav_env.nav.zupt_config import UpdateMode, ZuptUkfConfig
@@ -262,4 +263,5 @@ def search(
 
 def write(result: dict[str, Any], path: Path) -> None:
     """Write the search result as the shipped ``real_fixed.json``."""
-    path.write_text(json.dumps(result, indent=1, default=float) + "\n")
+    with writing(path):
+        path.write_text(json.dumps(result, indent=1, default=float) + "\n")

@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from pednav_env.files import writing
 from pednav_env.gait.foot import FootSimConfig, simulate_foot
 from pednav_env.gait.foot_route import Gait
 from pednav_env.gait.speed_route import SpeedRouteConfig, speed_route
@@ -233,5 +234,6 @@ def write_recording_csv(walk: SimulatedWalk, path: str | Path) -> Path:
         (walk.time, walk.omega_b, walk.f_b, walk.pos_n, walk.stance.astype(int), walk.gait)
     )
     fmt = ["%.6f"] + ["%.9g"] * 9 + ["%d", "%d"]
-    np.savetxt(path, data, delimiter=",", header=",".join(CSV_COLUMNS), comments="", fmt=fmt)
+    with writing(path):
+        np.savetxt(path, data, delimiter=",", header=",".join(CSV_COLUMNS), comments="", fmt=fmt)
     return path

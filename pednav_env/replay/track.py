@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pednav_env.files import writing
 from pednav_env.replay.runner import RecordingRun
 from pednav_env.replay.stream import StreamStates
 
@@ -93,5 +94,6 @@ def write_track_csv(states: StreamStates, path: str | Path) -> Path:
         )
     )
     fmt = ["%.6f"] + ["%.9g"] * 9 + ["%d", "%d"] + ["%.6g"] * 9
-    np.savetxt(path, data, delimiter=",", header=",".join(TRACK_COLUMNS), comments="", fmt=fmt)
+    with writing(path):
+        np.savetxt(path, data, delimiter=",", header=",".join(TRACK_COLUMNS), comments="", fmt=fmt)
     return path

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pednav_env.files import save_figure
 from pednav_env.gait.pendulum import PendulumSteps, step_kinematics
 from pednav_env.nav.step_velocity import biomechanical_step_velocity, nested_trapezoid_mean_velocity
 from pednav_env.reproduce import ReproductionResult, ReproductionRow
@@ -142,5 +143,5 @@ def _plot(out: Path, t: np.ndarray, *series: np.ndarray) -> None:
     axes[2].set_xlabel("t (s)")
     for a in axes:
         a.legend()
-    fig.savefig(out / "paper000_step.png", dpi=100)
+    save_figure(fig, out / "paper000_step.png", dpi=100)
     plt.close(fig)

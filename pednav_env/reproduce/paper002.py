@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from pednav_env.constants import STANDARD_GRAVITY
+from pednav_env.files import save_figure
 from pednav_env.gait.robot import RobotConfig, RobotWalk, simulate_robot
 from pednav_env.nav.waist_dr import euler_dead_reckoning
 from pednav_env.reproduce import ReproductionResult, ReproductionRow
@@ -200,7 +201,7 @@ def _plots(out: Path, amps: np.ndarray, results: dict, dt: float, g: float) -> N
     ax.set_ylabel("north (m)")
     ax.set_aspect("equal")
     ax.legend()
-    fig.savefig(out / "paper002_trajectory.png", dpi=100)
+    save_figure(fig, out / "paper002_trajectory.png", dpi=100)
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(6, 4))
     for suffix, res in results.items():
@@ -212,5 +213,5 @@ def _plots(out: Path, amps: np.ndarray, results: dict, dt: float, g: float) -> N
     ax.set_ylabel("end miss R (m)")
     ax.set_yscale("log")
     ax.legend(fontsize=6)
-    fig.savefig(out / "paper002_sweep.png", dpi=100)
+    save_figure(fig, out / "paper002_sweep.png", dpi=100)
     plt.close(fig)

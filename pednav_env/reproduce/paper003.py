@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pednav_env.files import save_figure
 from pednav_env.gait.foot import FootTrajectory, simulate_foot
 from pednav_env.gait.foot_route import paper_stride_shape, square_route
 from pednav_env.nav.detectors import ThresholdDetectorConfig
@@ -240,7 +241,7 @@ def write_figures(results: dict[str, PaperRun], out: Path) -> Path:
         ax.set_title(config)
         ax.legend()
     fig.tight_layout()
-    fig.savefig(out / "paper003_trajectory.png", dpi=110)
+    save_figure(fig, out / "paper003_trajectory.png", dpi=110)
     plt.close(fig)
 
     fig, axes = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
@@ -255,6 +256,6 @@ def write_figures(results: dict[str, PaperRun], out: Path) -> Path:
     axes[1].set_xlabel("time (s)")
     axes[0].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "paper003_errors.png", dpi=110)
+    save_figure(fig, out / "paper003_errors.png", dpi=110)
     plt.close(fig)
     return out

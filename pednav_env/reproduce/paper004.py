@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from pednav_env.constants import EARTH_RADIUS, STANDARD_GRAVITY
+from pednav_env.files import save_figure
 from pednav_env.gait.waist_walk import PAPER_STEPS, route_azimuths
 from pednav_env.nav.step_fusion_kf import (
     H_DV,
@@ -332,7 +333,7 @@ def _plots(out: Path, stats: MonteCarloStats, sigma_a: tuple[float, ...]) -> Non
     ax.set_xlabel("step k")
     ax.set_ylabel("ē_E (m/s)")
     ax.legend()
-    fig.savefig(out / "paper004_mean.png", dpi=100)
+    save_figure(fig, out / "paper004_mean.png", dpi=100)
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(6, 4))
     for c, s in enumerate(sigma_a):
@@ -342,7 +343,7 @@ def _plots(out: Path, stats: MonteCarloStats, sigma_a: tuple[float, ...]) -> Non
     ax.set_xlabel("step k")
     ax.set_ylabel("m/s (dashed: sqrt P[0,0])")
     ax.legend()
-    fig.savefig(out / "paper004_sigma.png", dpi=100)
+    save_figure(fig, out / "paper004_sigma.png", dpi=100)
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(6, 4))
     for c, s in enumerate(sigma_a):
@@ -351,5 +352,5 @@ def _plots(out: Path, stats: MonteCarloStats, sigma_a: tuple[float, ...]) -> Non
     ax.set_xlabel("distance R (m)")
     ax.set_ylabel("Δ_E (m)")
     ax.legend()
-    fig.savefig(out / "paper004_position.png", dpi=100)
+    save_figure(fig, out / "paper004_position.png", dpi=100)
     plt.close(fig)
