@@ -9,7 +9,7 @@ Subcommands (their JSON formats are contracts, see docs/CONTRACTS.md):
   [--backend serial|ray] [--ray-address A]`` — policies on the same held-out
   episodes.
 - ``pednav train ENV_ID --algo ppo|sac [--timesteps N] [--seed S | --seeds S ...]
-  [--n-envs K] [--config FILE] [--run-dir DIR] [--resume] [--backend ...]`` —
+  [--n-envs K] [--config FILE] [--run-dir DIR] [--resume] [--overwrite] [--backend ...]`` —
   train a tuner (SB3), one run or one per seed.
 - ``pednav tune ENV_ID [--speed LO HI] [--run-dir DIR] [--install] [--backend ...]`` — CMA-ES
   search of the tuned-fixed baseline (:mod:`agents.cli_tune`).
@@ -42,6 +42,7 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import NoReturn
 
 from agents.cli_distill import add_distill_command
@@ -114,13 +115,32 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
 def _cmd_train(args: argparse.Namespace) -> int:
     from agents.policies import FAMILY_ENVS
-    from agents.train import load_hyperparams, train, train_seeds
+    from agents.train import (
+        check_seeds,
+        default_run_dir,
+        load_hyperparams,
+        remove_outputs,
+        train,
+        train_seeds,
+    )
+    from pednav_env.seeds import training_seed
 
     if args.filter is not None and args.env_id not in FAMILY_ENVS:
         raise ValueError(f"--filter: {args.env_id} has no filter families")
     load_hyperparams(args.algo, args.env_id, args.config)  # a bad file before the run dir
+    if args.seeds is None:
+        training_seed(args.seed)
+        run_dirs = [Path(args.run_dir or default_run_dir(args.env_id, args.algo, args.seed))]
+    else:
+        check_seeds(args.seeds)
+        run_dirs = [default_run_dir(args.env_id, args.algo, s, args.run_dir) for s in args.seeds]
     if args.run_dir is not None:
         output_dir(args.run_dir, "--run-dir")
+    stale = _stale_train_outputs(args, run_dirs)
+    if stale:
+        remove_outputs(stale)
+        for path in stale:
+            print(f"removed {path}", file=sys.stderr)
 
     common = {
         "timesteps": args.timesteps,
@@ -160,6 +180,34 @@ def _cmd_train(args: argparse.Namespace) -> int:
     for run_dir in run_dirs:
         print(f"saved {run_dir / 'model.zip'} (+ vecnormalize.pkl, meta.json)")
     return 0
+
+
+def _stale_train_outputs(args: argparse.Namespace, run_dirs: list[Path]) -> list[Path]:
+    """What earlier runs left in ``pednav train``'s run directories
+    (:func:`agents.train.stale_outputs`): the paths to remove with ``--overwrite``, else
+    a ValueError naming them."""
+    from agents.train import stale_outputs
+
+    algo = None if args.seeds is None else args.algo
+    stale = stale_outputs(run_dirs, args.resume, algo, args.seeds or ())
+    if not stale or args.overwrite:
+        return stale
+    if args.seeds is None:
+        names = ", ".join(p.name for p in stale)
+        raise ValueError(
+            f"--run-dir {run_dirs[0]}: holds an earlier run ({names}); give --resume to "
+            "continue it or --overwrite to remove it first"
+        )
+    parent = run_dirs[0].parent
+    earlier = sorted({p.parent.name for p in stale if p.parent != parent})
+    others = [p.name for p in stale if p.parent == parent]
+    parts = [f"earlier runs in {', '.join(earlier)}"] if earlier else []
+    if others:
+        parts.append(f"runs of seeds not in --seeds: {', '.join(others)}")
+    then = "give --overwrite to remove them first"
+    if not others:
+        then = "give --resume to continue them or --overwrite to remove them first"
+    raise ValueError(f"--run-dir {parent}: {'; '.join(parts)}; {then}")
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -317,6 +365,14 @@ def build_parser() -> argparse.ArgumentParser:
         "to recordings); written to meta.json",
     )
     tr.add_argument("--resume", action="store_true", help="continue from the newest checkpoint")
+    tr.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="remove what earlier runs left first (their model.zip, vecnormalize.pkl, "
+        "meta.json, checkpoints/, tb/; with --seeds also RUN_DIR/ALGO_seedS of seeds not "
+        "given); without it such a run directory is refused. With --resume only the "
+        "other seeds' directories go",
+    )
     tr.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_backend_options(tr, "the runs of --seeds train")
     tr.set_defaults(func=_cmd_train)

@@ -1,7 +1,7 @@
 """Train a filter tuner with Stable-Baselines3 on a native vector env.
 
 ``pednav train ENV_ID --algo ppo|sac [--timesteps N] [--seed S] [--n-envs K]
-[--config FILE] [--run-dir DIR] [--resume]``
+[--config FILE] [--run-dir DIR] [--resume] [--overwrite]``
 
 - The env is the native vector env (one batched filter for all K lanes)
   behind the :class:`pednav_env.sb3.NativeVecEnv` adapter, wrapped in
@@ -17,6 +17,13 @@
   ``checkpoints/`` (model and statistics every ``checkpoint_steps``) and
   ``tb/`` (TensorBoard logs); ``--resume`` continues from the newest
   checkpoint.
+- A run directory that already holds a run (:data:`RUN_OUTPUTS`), and with
+  ``--seeds`` a parent holding ``<algo>_seed<S>`` directories of seeds not in the
+  list, would mix the earlier run's files into the new one: its checkpoints, which
+  ``--resume`` picks by step count, its TensorBoard logs, other seeds' runs beside
+  this set. :func:`stale_outputs` lists them; ``pednav train`` refuses them unless
+  ``--overwrite`` (then :func:`remove_outputs` deletes them first); ``--resume`` keeps
+  the runs it continues.
 - :func:`train_seeds` trains one run per seed (``pednav train --seeds``), in
   this process or as parallel tasks of a backend (:mod:`agents.backends`).
 """
@@ -25,6 +32,7 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -46,6 +54,8 @@ from pednav_env.seeds import training_seed
 HYPERPARAMS_DIR = Path(__file__).parent / "hyperparams"
 ALGOS = ("ppo", "sac")
 RUN_KEYS = ("n_envs", "n_timesteps", "normalize", "env_kwargs", "checkpoint_steps")
+#: What :func:`train` writes into a run directory (module docstring).
+RUN_OUTPUTS = ("model.zip", "vecnormalize.pkl", "meta.json", "checkpoints", "tb")
 
 
 def load_hyperparams(algo: str, env_id: str, config_file: str | Path | None = None) -> dict:
@@ -241,12 +251,7 @@ def train_seeds(
     ``runs/<env name>/``); ``backend`` None runs them in turn, else as its parallel
     tasks. Each run is the same as ``train(env_id, algo, seed=S, ...)`` alone.
     ``on_run(1)`` is called as each run finishes."""
-    if not seeds:
-        raise ValueError("seeds: give at least one training seed")
-    if len(set(seeds)) != len(seeds):
-        raise ValueError(f"seeds must be distinct, got {list(seeds)}")
-    for s in seeds:
-        training_seed(s)  # ValueError for a seed outside the training range
+    check_seeds(seeds)
     jobs = [
         TrainJob(env_id, algo, s, default_run_dir(env_id, algo, s, parent_dir), **train_kwargs)
         for s in seeds
@@ -259,3 +264,48 @@ def train_seeds(
                 on_run(1)
         return out
     return list(backend.map(run_job, jobs, on_done=lambda i: on_run and on_run(1)))
+
+
+def check_seeds(seeds: Sequence[int]) -> None:
+    """ValueError unless ``seeds`` are one or more distinct training run seeds."""
+    if not seeds:
+        raise ValueError("seeds: give at least one training seed")
+    if len(set(seeds)) != len(seeds):
+        raise ValueError(f"seeds must be distinct, got {list(seeds)}")
+    for s in seeds:
+        training_seed(s)  # ValueError for a seed outside the training range
+
+
+def stale_outputs(
+    run_dirs: Sequence[Path],
+    resume: bool = False,
+    algo: str | None = None,
+    seeds: Sequence[int] = (),
+) -> list[Path]:
+    """What earlier runs left that a new training into ``run_dirs`` would mix with its
+    own: the :data:`RUN_OUTPUTS` already in each of ``run_dirs`` (none with ``resume``,
+    which continues them) and, with ``algo`` (``pednav train --seeds``), the
+    ``<algo>_seed<S>`` directories beside them (in their parent) of seeds not in
+    ``seeds``. Sorted, each path once."""
+    found: set[Path] = set()
+    if not resume:
+        found.update(d / name for d in run_dirs for name in RUN_OUTPUTS if (d / name).exists())
+    if algo is not None:
+        pattern = re.compile(rf"{re.escape(algo)}_seed(\d+)")
+        for parent in {Path(d).parent for d in run_dirs}:
+            if not parent.is_dir():
+                continue
+            for path in parent.iterdir():
+                match = pattern.fullmatch(path.name)
+                if match and path.is_dir() and int(match.group(1)) not in set(seeds):
+                    found.add(path)
+    return sorted(found)
+
+
+def remove_outputs(paths: Sequence[Path]) -> None:
+    """Delete ``paths`` (files, or directories with their contents)."""
+    for path in paths:
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path)
+        else:
+            path.unlink()
