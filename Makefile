@@ -19,9 +19,10 @@ $(VENV)/.installed: pyproject.toml
 # Main job: distil the privileged oracle of MarkerTrack-v0 (the constant tuned per UWB
 # condition) into a sensor-only tuner by DAgger (agents/distill.py), then compare it with
 # the paper filter, the CMA-ES constant and the oracle on 200 development episodes.
+# --overwrite: the demo re-creates its run, so a second `make demo` replaces the first.
 DEMO_ENV ?= pednav/MarkerTrack-v0
 demo: setup
-	$(VENV)/bin/pednav distill $(DEMO_ENV) --run-dir runs/demo
+	$(VENV)/bin/pednav distill $(DEMO_ENV) --run-dir runs/demo --overwrite
 	$(VENV)/bin/pednav evaluate $(DEMO_ENV) --policy paper tuned oracle runs/demo \
 		--episodes 200 --seed 5000
 

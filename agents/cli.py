@@ -115,11 +115,11 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
 def _cmd_train(args: argparse.Namespace) -> int:
     from agents.policies import FAMILY_ENVS
+    from agents.run_dirs import check_seeds, claim_run_dirs
     from agents.train import (
-        check_seeds,
+        check_resumable,
         default_run_dir,
         load_hyperparams,
-        remove_outputs,
         train,
         train_seeds,
     )
@@ -131,16 +131,17 @@ def _cmd_train(args: argparse.Namespace) -> int:
     if args.seeds is None:
         training_seed(args.seed)
         run_dirs = [Path(args.run_dir or default_run_dir(args.env_id, args.algo, args.seed))]
+        base = run_dirs[0]
     else:
         check_seeds(args.seeds)
         run_dirs = [default_run_dir(args.env_id, args.algo, s, args.run_dir) for s in args.seeds]
+        base = run_dirs[0].parent
+    if args.resume:
+        check_resumable(run_dirs)  # before --overwrite removes anything
     if args.run_dir is not None:
         output_dir(args.run_dir, "--run-dir")
-    stale = _stale_train_outputs(args, run_dirs)
-    if stale:
-        remove_outputs(stale)
-        for path in stale:
-            print(f"removed {path}", file=sys.stderr)
+    for path in claim_run_dirs(base, run_dirs, f"{args.algo}_", args.overwrite, args.resume):
+        print(f"removed {path}", file=sys.stderr)
 
     common = {
         "timesteps": args.timesteps,
@@ -180,34 +181,6 @@ def _cmd_train(args: argparse.Namespace) -> int:
     for run_dir in run_dirs:
         print(f"saved {run_dir / 'model.zip'} (+ vecnormalize.pkl, meta.json)")
     return 0
-
-
-def _stale_train_outputs(args: argparse.Namespace, run_dirs: list[Path]) -> list[Path]:
-    """What earlier runs left in ``pednav train``'s run directories
-    (:func:`agents.train.stale_outputs`): the paths to remove with ``--overwrite``, else
-    a ValueError naming them."""
-    from agents.train import stale_outputs
-
-    algo = None if args.seeds is None else args.algo
-    stale = stale_outputs(run_dirs, args.resume, algo, args.seeds or ())
-    if not stale or args.overwrite:
-        return stale
-    if args.seeds is None:
-        names = ", ".join(p.name for p in stale)
-        raise ValueError(
-            f"--run-dir {run_dirs[0]}: holds an earlier run ({names}); give --resume to "
-            "continue it or --overwrite to remove it first"
-        )
-    parent = run_dirs[0].parent
-    earlier = sorted({p.parent.name for p in stale if p.parent != parent})
-    others = [p.name for p in stale if p.parent == parent]
-    parts = [f"earlier runs in {', '.join(earlier)}"] if earlier else []
-    if others:
-        parts.append(f"runs of seeds not in --seeds: {', '.join(others)}")
-    then = "give --overwrite to remove them first"
-    if not others:
-        then = "give --resume to continue them or --overwrite to remove them first"
-    raise ValueError(f"--run-dir {parent}: {'; '.join(parts)}; {then}")
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -370,8 +343,8 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="remove what earlier runs left first (their model.zip, vecnormalize.pkl, "
         "meta.json, checkpoints/, tb/; with --seeds also RUN_DIR/ALGO_seedS of seeds not "
-        "given); without it such a run directory is refused. With --resume only the "
-        "other seeds' directories go",
+        "given and an earlier single run in RUN_DIR); without it such a run directory is "
+        "refused. With --resume the runs it continues stay",
     )
     tr.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_backend_options(tr, "the runs of --seeds train")

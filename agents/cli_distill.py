@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from agents.cli_types import nonnegative_int, output_dir, positive_int
 
@@ -12,6 +13,7 @@ def run_distill(args: argparse.Namespace) -> int:
     from agents.distill import distill
     from agents.evaluate import RECORDING_ENVS, env_options
     from agents.policies import FAMILY_ENVS
+    from agents.run_dirs import check_seeds, claim_run_dirs
     from pednav_env.envs.foot_filters import LEARNED_FAMILY
 
     env_options(args.env_id)  # ValueError for an unknown env id
@@ -24,9 +26,13 @@ def run_distill(args: argparse.Namespace) -> int:
     family = (args.filter or LEARNED_FAMILY) if args.env_id in FAMILY_ENVS else None
     if args.filter is not None and family is None:
         raise ValueError(f"--filter: {args.env_id} has no filter families")
-    base = output_dir(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/distill", "--run-dir")
-    for seed in args.seeds:
-        run_dir = base / f"seed{seed}" if len(args.seeds) > 1 else base
+    check_seeds(args.seeds)
+    base = Path(args.run_dir or f"runs/{args.env_id.split('/')[-1]}/distill")
+    run_dirs = [base / f"seed{s}" for s in args.seeds] if len(args.seeds) > 1 else [base]
+    output_dir(base, "--run-dir")
+    for path in claim_run_dirs(base, run_dirs, "", args.overwrite):
+        print(f"removed {path}", file=sys.stderr)
+    for seed, run_dir in zip(args.seeds, run_dirs, strict=True):
         distill(
             args.env_id,
             run_dir,
@@ -75,4 +81,11 @@ def add_distill_command(sub: argparse._SubParsersAction) -> None:
     )
     di.add_argument("--lanes", type=positive_int, default=64, help="parallel episodes")
     di.add_argument("--run-dir", default=None, help="output dir (default runs/ENV/distill[/seedS])")
+    di.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="remove what earlier runs left first (model.zip, vecnormalize.pkl, meta.json, "
+        "checkpoints/, tb/ of a run directory; RUN_DIR/seedS of seeds not given); without "
+        "it such a run directory is refused",
+    )
     di.set_defaults(func=run_distill)

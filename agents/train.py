@@ -17,13 +17,11 @@
   ``checkpoints/`` (model and statistics every ``checkpoint_steps``) and
   ``tb/`` (TensorBoard logs); ``--resume`` continues from the newest
   checkpoint.
-- A run directory that already holds a run (:data:`RUN_OUTPUTS`), and with
-  ``--seeds`` a parent holding ``<algo>_seed<S>`` directories of seeds not in the
-  list, would mix the earlier run's files into the new one: its checkpoints, which
-  ``--resume`` picks by step count, its TensorBoard logs, other seeds' runs beside
-  this set. :func:`stale_outputs` lists them; ``pednav train`` refuses them unless
-  ``--overwrite`` (then :func:`remove_outputs` deletes them first); ``--resume`` keeps
-  the runs it continues.
+- A run directory that already holds a run, and with ``--seeds`` a parent holding
+  ``<algo>_seed<S>`` directories of seeds not in the list, would mix the earlier run's
+  files into the new one (:mod:`agents.run_dirs`): ``pednav train`` refuses them unless
+  ``--overwrite`` (which removes them first); ``--resume`` keeps the runs it continues,
+  after :func:`check_resumable` found a checkpoint in each.
 - :func:`train_seeds` trains one run per seed (``pednav train --seeds``), in
   this process or as parallel tasks of a backend (:mod:`agents.backends`).
 """
@@ -32,7 +30,6 @@ from __future__ import annotations
 
 import json
 import re
-import shutil
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -46,6 +43,7 @@ import yaml
 import pednav_env  # noqa: F401  (registers the environments)
 from agents.backends import one_torch_thread
 from agents.policies import FAMILY_ENVS
+from agents.run_dirs import check_seeds
 from pednav_env.envs.foot_filters import LEARNED_FAMILY
 from pednav_env.files import writing
 from pednav_env.sb3 import NativeVecEnv
@@ -54,8 +52,6 @@ from pednav_env.seeds import training_seed
 HYPERPARAMS_DIR = Path(__file__).parent / "hyperparams"
 ALGOS = ("ppo", "sac")
 RUN_KEYS = ("n_envs", "n_timesteps", "normalize", "env_kwargs", "checkpoint_steps")
-#: What :func:`train` writes into a run directory (module docstring).
-RUN_OUTPUTS = ("model.zip", "vecnormalize.pkl", "meta.json", "checkpoints", "tb")
 
 
 def load_hyperparams(algo: str, env_id: str, config_file: str | Path | None = None) -> dict:
@@ -87,6 +83,13 @@ def _latest_checkpoint(run_dir: Path) -> tuple[Path, Path] | None:
         return None
     steps = re.findall(r"_(\d+)_steps", ckpts[-1].name)[0]
     return ckpts[-1], run_dir / "checkpoints" / f"model_vecnormalize_{steps}_steps.pkl"
+
+
+def check_resumable(run_dirs: Sequence[str | Path]) -> None:
+    """ValueError unless each of ``run_dirs`` holds a checkpoint for ``--resume``."""
+    for run_dir in run_dirs:
+        if _latest_checkpoint(Path(run_dir)) is None:
+            raise ValueError(f"--resume: no checkpoint in {Path(run_dir) / 'checkpoints'}")
 
 
 def train(
@@ -126,9 +129,9 @@ def train(
     policy = algo_kwargs.pop("policy", "MlpPolicy")
     run_dir = Path(run_dir or default_run_dir(env_id, algo, seed))
     run_dir.mkdir(parents=True, exist_ok=True)
+    if resume:
+        check_resumable([run_dir])
     latest = _latest_checkpoint(run_dir) if resume else None
-    if resume and latest is None:
-        raise ValueError(f"--resume: no checkpoint in {run_dir / 'checkpoints'}")
     meta_file = run_dir / "meta.json"
     earlier = json.loads(meta_file.read_text()) if latest and meta_file.exists() else {}
     resumes = int(earlier.get("resumes", 0)) + 1 if latest is not None else 0
@@ -264,48 +267,3 @@ def train_seeds(
                 on_run(1)
         return out
     return list(backend.map(run_job, jobs, on_done=lambda i: on_run and on_run(1)))
-
-
-def check_seeds(seeds: Sequence[int]) -> None:
-    """ValueError unless ``seeds`` are one or more distinct training run seeds."""
-    if not seeds:
-        raise ValueError("seeds: give at least one training seed")
-    if len(set(seeds)) != len(seeds):
-        raise ValueError(f"seeds must be distinct, got {list(seeds)}")
-    for s in seeds:
-        training_seed(s)  # ValueError for a seed outside the training range
-
-
-def stale_outputs(
-    run_dirs: Sequence[Path],
-    resume: bool = False,
-    algo: str | None = None,
-    seeds: Sequence[int] = (),
-) -> list[Path]:
-    """What earlier runs left that a new training into ``run_dirs`` would mix with its
-    own: the :data:`RUN_OUTPUTS` already in each of ``run_dirs`` (none with ``resume``,
-    which continues them) and, with ``algo`` (``pednav train --seeds``), the
-    ``<algo>_seed<S>`` directories beside them (in their parent) of seeds not in
-    ``seeds``. Sorted, each path once."""
-    found: set[Path] = set()
-    if not resume:
-        found.update(d / name for d in run_dirs for name in RUN_OUTPUTS if (d / name).exists())
-    if algo is not None:
-        pattern = re.compile(rf"{re.escape(algo)}_seed(\d+)")
-        for parent in {Path(d).parent for d in run_dirs}:
-            if not parent.is_dir():
-                continue
-            for path in parent.iterdir():
-                match = pattern.fullmatch(path.name)
-                if match and path.is_dir() and int(match.group(1)) not in set(seeds):
-                    found.add(path)
-    return sorted(found)
-
-
-def remove_outputs(paths: Sequence[Path]) -> None:
-    """Delete ``paths`` (files, or directories with their contents)."""
-    for path in paths:
-        if path.is_dir() and not path.is_symlink():
-            shutil.rmtree(path)
-        else:
-            path.unlink()

@@ -98,3 +98,32 @@ def test_an_empty_or_new_run_dir_trains_without_overwrite(tmp_path):
     assert main(train_argv(tmp_path, tmp_path / "empty", "--timesteps", "64")) == 0
     assert main(train_argv(tmp_path, tmp_path / "runs", "--seeds", "3", "--timesteps", "64")) == 0
     assert (tmp_path / "runs" / "ppo_seed3" / "model.zip").exists()
+
+
+def test_resume_with_overwrite_checks_the_checkpoints_before_removing(tmp_path, capsys):
+    runs = tmp_path / "runs"
+    assert main(train_argv(tmp_path, runs, "--seeds", "0", "--timesteps", "64")) == 0
+    capsys.readouterr()
+    # ppo_seed1 has no checkpoint to resume: refused before ppo_seed0 (not in --seeds) goes
+    argv = train_argv(tmp_path, runs, "--seeds", "1", "--resume", "--overwrite")
+    assert main(argv) == 2
+    assert capsys.readouterr().err == (
+        f"pednav: error: --resume: no checkpoint in {runs / 'ppo_seed1' / 'checkpoints'}\n"
+    )
+    assert [p.name for p in runs.iterdir()] == ["ppo_seed0"]
+    assert (runs / "ppo_seed0" / "model.zip").exists()
+
+
+def test_seeds_beside_a_single_run_are_refused(tmp_path, capsys):
+    run = tmp_path / "run"
+    assert main(train_argv(tmp_path, run, "--timesteps", "64")) == 0
+    capsys.readouterr()
+    assert main(train_argv(tmp_path, run, "--seeds", "0", "--timesteps", "64")) == 2
+    assert capsys.readouterr().err == (
+        f"pednav: error: --run-dir {run}: an earlier single run (checkpoints, meta.json, "
+        "model.zip, tb, vecnormalize.pkl); give --overwrite to remove them first\n"
+    )
+    assert not (run / "ppo_seed0").exists()
+    argv = train_argv(tmp_path, run, "--seeds", "0", "--timesteps", "64", "--overwrite")
+    assert main(argv) == 0
+    assert [p.name for p in run.iterdir()] == ["ppo_seed0"]
