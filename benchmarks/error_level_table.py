@@ -30,11 +30,11 @@ from __future__ import annotations
 
 import argparse
 import json
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from agents.error_level import DEFAULT_WALKS, TWIN_FORMS, error_level
+from agents.twin_choice import with_threshold
 from pednav_env.calibration.compare import MODELS, model_from_json
 from pednav_env.io import load_recording
 from pednav_env.replay.setup import real_fixed_setup
@@ -80,8 +80,7 @@ def run(
     for name in models:
         model = MODELS[name] if name in MODELS else model_from_json(name)
         for gamma in gammas:
-            detector = replace(base.filter.detector, threshold=gamma)
-            setup = replace(base, filter=replace(base.filter, detector=detector))
+            setup = with_threshold(base, gamma)
             for set_name, recordings in sets.items():
                 report = error_level(
                     recordings, model, walks, seed, setup, f"γ = {gamma:.3g}", twins

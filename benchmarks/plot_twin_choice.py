@@ -19,17 +19,13 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.gamma_response import as_array
 from pednav_env.files import save_figure
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 SET = "hallway walks"
 REAL_FIXED_THRESHOLD = 2.25e7
-
-
-def as_array(values: list[float | None]) -> np.ndarray:
-    """A stored curve with ``None`` (diverged) as NaN (not drawn)."""
-    return np.array([np.nan if v is None else v for v in values], dtype=float)
 
 
 def main() -> None:

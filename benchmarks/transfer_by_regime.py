@@ -40,13 +40,13 @@ import json
 import tempfile
 import time
 import warnings
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 from scipy import stats
 
 from agents.run_recording import run_named, summarize
+from agents.twin_choice import with_threshold
 from baselines.tuned import save_result
 from pednav_env.io import find_recordings, load_recording
 from pednav_env.replay.runner import prepare, run_prepared
@@ -106,13 +106,7 @@ def reference_check(choices: dict, hallway: list) -> dict[str, float]:
     """The hallway reference recomputed: its setup with its γ on each walk
     (footprint mean error, m), to compare with the stored per-walk errors."""
     ref = choices["hallway_reference"]
-    setup = RealFilterSetup.from_dict(ref["setup"])
-    setup = replace(
-        setup,
-        filter=replace(
-            setup.filter, detector=replace(setup.filter.detector, threshold=ref["threshold"])
-        ),
-    )
+    setup = with_threshold(RealFilterSetup.from_dict(ref["setup"]), ref["threshold"])
     return {
         rec.name: summarize(rec, run_prepared(prepare(rec, setup)))["footprint_mean_error_m"]
         for rec in hallway

@@ -365,10 +365,8 @@ def test_truth_glitches_are_reported(capsys, tmp_path):
 def test_twins_policy_chooses_the_threshold_it_runs(capsys):
     """``--policy twins``: real-fixed with the SHOE threshold chosen on twins of the
     recording's own strides; the JSON reports the choice and the run uses it."""
-    from dataclasses import replace
-
     from agents.run_recording import summarize
-    from agents.twin_choice import TWIN_THRESHOLDS
+    from agents.twin_choice import TWIN_THRESHOLDS, with_threshold
     from pednav_env.io import load_recording
     from pednav_env.replay.runner import prepare, run_prepared
     from pednav_env.replay.setup import real_fixed_setup
@@ -382,9 +380,7 @@ def test_twins_policy_chooses_the_threshold_it_runs(capsys):
     medians = [m for m in choice["twin_median_m"].values() if m is not None]
     assert len(choice["twin_median_m"]) == len(TWIN_THRESHOLDS)
     assert min(medians) == choice["twin_median_m"][f"{choice['shoe_threshold']:.4g}"]
-    setup = real_fixed_setup()
-    detector = replace(setup.filter.detector, threshold=choice["shoe_threshold"])
-    chosen = replace(setup, filter=replace(setup.filter, detector=detector))
+    chosen = with_threshold(real_fixed_setup(), choice["shoe_threshold"])
     rec = load_recording(PYSHOE)
     expected = summarize(rec, run_prepared(prepare(rec, chosen)))
     assert out["armse_pyshoe_m"] == pytest.approx(expected["armse_pyshoe_m"], rel=1e-12)

@@ -14,21 +14,12 @@ import os
 from pathlib import Path
 
 import pytest
-from testdata import DATA, PYSHOE_SAMPLE
+from testdata import DATA, PYSHOE_SAMPLE, tiny_train_argv
 
 from agents.cli import main
 from pednav_env.files import save_figure, writing
 
 DISK_FULL = os.strerror(errno.ENOSPC)
-TINY_PPO = """pednav/WaistStep-v0:
-  n_envs: 2
-  n_timesteps: 128
-  n_steps: 64
-  batch_size: 64
-  n_epochs: 1
-  policy_kwargs: {net_arch: [8]}
-  checkpoint_steps: 64
-"""
 
 
 def fail_writes_to(monkeypatch, name: str) -> None:
@@ -151,22 +142,16 @@ def test_sim2real_plot(tmp_path, monkeypatch, capsys):
 
 @pytest.mark.parametrize("name", ["model.zip", "vecnormalize.pkl", "meta.json"])
 def test_train_run_dir(name, tmp_path, monkeypatch, capsys):
-    config = tmp_path / "tiny.yml"
-    config.write_text(TINY_PPO)
     fail_writes_to(monkeypatch, name)
     run_dir = tmp_path / "run"
-    argv = ["train", "pednav/WaistStep-v0", "--config", str(config), "--no-progress"]
-    assert main([*argv, "--run-dir", str(run_dir)]) == 1
+    assert main(tiny_train_argv(tmp_path, run_dir)) == 1
     assert_one_line_naming(capsys, run_dir / name)
 
 
 def test_train_checkpoint_during_learning_names_the_run_directory(tmp_path, monkeypatch, capsys):
-    config = tmp_path / "tiny.yml"
-    config.write_text(TINY_PPO)
     fail_writes_to(monkeypatch, "model_64_steps.zip")
     run_dir = tmp_path / "run"
-    argv = ["train", "pednav/WaistStep-v0", "--config", str(config), "--no-progress"]
-    assert main([*argv, "--run-dir", str(run_dir)]) == 1
+    assert main(tiny_train_argv(tmp_path, run_dir)) == 1
     assert_one_line_naming(capsys, run_dir)
 
 
