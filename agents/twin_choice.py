@@ -31,7 +31,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.choose_shoe import threshold_sweep
+from agents.choose_shoe import threshold_knobs, threshold_sweep
 from agents.error_level import MIN_TWIN_STRIDES, footfall_twin_recordings
 from pednav_env.calibration.compare import MODELS
 from pednav_env.calibration.path_turns import StrideSequence, stride_sequence
@@ -83,21 +83,35 @@ def imu_stride_sequence(recording: Recording, route_setup: RealFilterSetup) -> S
     """The recording's strides as ``route_setup``'s filter sees them: its detected
     stance as stance labels and its position track (from the end of the alignment)
     as the track, through :func:`stride_sequence`. Uses the IMU only."""
+    return imu_stride_sequences(recording, route_setup)[0]
+
+
+def imu_stride_sequences(
+    recording: Recording, route_setup: RealFilterSetup, thresholds: Sequence[float] = ()
+) -> list[StrideSequence]:
+    """:func:`imu_stride_sequence` for ``route_setup`` with each SHOE threshold of
+    ``thresholds`` (one filter run, a lane per threshold;
+    :func:`agents.choose_shoe.threshold_knobs`), or for ``route_setup`` itself when
+    ``thresholds`` is empty."""
     prep = prepare(recording, route_setup)
-    run = run_prepared(prep)
+    knobs = threshold_knobs(route_setup, thresholds) if len(thresholds) else None
+    run = run_prepared(prep, max(1, len(thresholds)), knobs=knobs)
     start = prep.n_align
-    track = np.array(run.pos[0, start:], dtype=float)
-    track[~np.all(np.isfinite(track), axis=1)] = np.nan
-    samples = WalkSamples(
-        omega_b=prep.omega_b[start:],
-        f_b=prep.f_b[start:],
-        rate_hz=prep.rate_hz,
-        name=recording.name,
-        stance=np.asarray(run.stance[0, start:], dtype=bool),
-        truth_pos=track,
-        g=prep.g,
-    )
-    return stride_sequence(samples)
+    out = []
+    for lane in range(run.pos.shape[0]):
+        track = np.array(run.pos[lane, start:], dtype=float)
+        track[~np.all(np.isfinite(track), axis=1)] = np.nan
+        samples = WalkSamples(
+            omega_b=prep.omega_b[start:],
+            f_b=prep.f_b[start:],
+            rate_hz=prep.rate_hz,
+            name=recording.name,
+            stance=np.asarray(run.stance[lane, start:], dtype=bool),
+            truth_pos=track,
+            g=prep.g,
+        )
+        out.append(stride_sequence(samples))
+    return out
 
 
 def choose_threshold_on_twins(

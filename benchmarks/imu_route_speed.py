@@ -4,9 +4,9 @@ twins").
 
 For each of the 23 PyShoe development trials and the 8 hallway walks (``*_LLIO.mat``) and
 each γ of the twin grid (:data:`agents.twin_choice.TWIN_THRESHOLDS`, ``real-fixed``'s
-other knobs): the route :func:`agents.twin_choice.imu_stride_sequence` reads (the
-filter's detected stances and track), its median stride speed over the median stride
-speed from the truth or the footprints
+other knobs): the route :func:`agents.twin_choice.imu_stride_sequences` reads (the
+filter's detected stances and track; one filter run, a lane per γ), its median stride
+speed over the median stride speed from the truth or the footprints
 (:func:`pednav_env.calibration.path_turns.stride_sequence`), and its number of strides
 over the truth's. A description: nothing is chosen on it.
 
@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from agents.twin_choice import TWIN_THRESHOLDS, imu_stride_sequence, with_threshold
+from agents.twin_choice import TWIN_THRESHOLDS, imu_stride_sequences
 from pednav_env.calibration.path_turns import stride_sequence
 from pednav_env.calibration.sources import samples_from_recording
 from pednav_env.io import load_recording
@@ -53,8 +53,7 @@ def main() -> None:
             truth = stride_sequence(samples_from_recording(rec))
             truth_speed = float(np.median(truth.speed_mps))
             speed_ratio, count_ratio = [], []
-            for gamma in TWIN_THRESHOLDS:
-                route = imu_stride_sequence(rec, with_threshold(setup, gamma))
+            for route in imu_stride_sequences(rec, setup, TWIN_THRESHOLDS):
                 n = route.speed_mps.size
                 speed_ratio.append(float(np.median(route.speed_mps)) / truth_speed if n else None)
                 count_ratio.append(n / truth.speed_mps.size)
